@@ -1,0 +1,55 @@
+# Two commands a user needs (see README.md): `make demo` and `make test`.
+# Both install missing Debian packages, create a catkin workspace under
+# .build/ (ignored by git) that links to this checkout, and build there.
+
+SHELL := /bin/bash
+ROOT  := $(CURDIR)
+WS    ?= $(ROOT)/.build/ws
+BENCH_WS ?= $(ROOT)/.build/bench_ws
+JOBS  ?= 2
+OUT   ?= $(ROOT)/output
+
+# Debian's ROS tools live in /usr/bin; a pyenv python3 earlier on PATH lacks
+# the ROS modules.
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
+
+.PHONY: all deps workspace build test demo bench format check clean
+
+all: build
+
+deps:
+	@tools/install_deps.sh
+
+workspace:
+	@mkdir -p $(WS)/src
+	@if [ ! -e $(WS)/src/ekf_slam ]; then ln -s $(ROOT) $(WS)/src/ekf_slam; fi
+
+build: deps workspace
+	@cd $(WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) > $(WS)/build.log 2>&1 \
+	  || { tail -n 60 $(WS)/build.log; echo "build failed; full log: $(WS)/build.log"; exit 1; }
+	@echo "build: ok ($(WS))"
+
+check:
+	@tools/check_core_ros_free.sh
+	@tools/check_format.sh
+
+test: build check
+	@tools/run_tests.sh $(WS)
+
+demo: build
+	@source $(WS)/devel/setup.bash && tools/run_demo.sh $(OUT)
+
+bench: deps
+	@mkdir -p $(BENCH_WS)/src $(OUT)/bench
+	@if [ ! -e $(BENCH_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(BENCH_WS)/src/ekf_slam; fi
+	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
+	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
+	@tools/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
+
+format:
+	@tools/check_format.sh --fix
+
+clean:
+	rm -rf $(ROOT)/.build

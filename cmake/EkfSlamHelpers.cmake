@@ -1,0 +1,40 @@
+# Small helpers so that each component's CMakeLists.txt stays a list of
+# targets, not a page of boilerplate.
+
+# ekf_slam_add_gtest(<name> SOURCES <files...> LIBS <targets...>)
+# A gtest run by `catkin_make run_tests` (and so by `make test`).
+function(ekf_slam_add_gtest name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  if(CATKIN_ENABLE_TESTING)
+    catkin_add_gtest(${name} ${ARG_SOURCES} TIMEOUT ${ARG_TIMEOUT})
+    if(TARGET ${name})
+      target_link_libraries(${name} ${ARG_LIBS} gtest_main)
+    endif()
+  endif()
+endfunction()
+
+# ekf_slam_add_benchmark(<name> SOURCES <files...> LIBS <targets...>)
+# A Google Benchmark executable, built only with -DEKF_SLAM_BUILD_BENCH=ON
+# (`make bench`). Output lands in devel/lib/ekf_slam/bench/.
+function(ekf_slam_add_benchmark name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  if(EKF_SLAM_BUILD_BENCH)
+    find_package(benchmark REQUIRED)
+    add_executable(${name} ${ARG_SOURCES})
+    target_link_libraries(${name} ${ARG_LIBS} benchmark::benchmark)
+    set_target_properties(${name} PROPERTIES
+      RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/lib/${PROJECT_NAME}/bench)
+  endif()
+endfunction()
+
+# ekf_slam_add_rostest(<file.test> [DEPENDENCIES <targets...>])
+function(ekf_slam_add_rostest file)
+  cmake_parse_arguments(ARG "" "" "DEPENDENCIES" ${ARGN})
+  if(CATKIN_ENABLE_TESTING)
+    find_package(rostest REQUIRED)
+    add_rostest(${file} DEPENDENCIES ${ARG_DEPENDENCIES})
+  endif()
+endfunction()

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian packages this project needs, only when one is missing.
+# Idempotent and silent when everything is present. Needs root (or sudo).
+set -euo pipefail
+
+PACKAGES=(
+  # build
+  build-essential cmake catkin clang-format
+  # ROS 1 from Debian
+  ros-core-dev libroscpp-dev librosbag-dev librostest-dev python3-rostest
+  libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
+  libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev
+  libdiagnostic-updater-dev libdiagnostic-msgs-dev
+  ros-message-generation ros-message-runtime python3-rosbag python3-rospy
+  # libraries
+  libeigen3-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
+  # figures
+  python3-matplotlib python3-numpy python3-yaml
+)
+
+missing=()
+for pkg in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$pkg")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "install_deps: installing missing Debian packages: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "install_deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  SUDO="sudo"
+fi
+export DEBIAN_FRONTEND=noninteractive
+# An apt cache that has never been filled finds nothing: update once.
+if [ -z "$(ls -A /var/lib/apt/lists 2>/dev/null | grep -v -e lock -e partial)" ] ||
+   ! apt-cache show "${missing[0]}" >/dev/null 2>&1; then
+  $SUDO apt-get update -qq
+fi
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install_deps: done"
