@@ -1,0 +1,156 @@
+// Every analytic Jacobian of the models against central differences,
+// including bearings near ±π and landmarks close to the robot.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "ekf_slam_core/models/odometry_motion_model.h"
+#include "ekf_slam_core/models/point_observation_model.h"
+#include "ekf_slam_core/testing/numerical_jacobian.h"
+
+namespace ekf_slam {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using testing::numericalJacobian;
+
+constexpr double kTol = 1e-6;
+
+::testing::AssertionResult near(const MatrixXd& analytic, const MatrixXd& numeric, double tol) {
+  const double err = (analytic - numeric).cwiseAbs().maxCoeff();
+  if (err <= tol * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "max error " << err << "\nanalytic\n"
+                                       << analytic << "\nnumeric\n"
+                                       << numeric;
+}
+
+TEST(OdometryMotionModel, ControlReproducesTheOdometryIncrement) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> pos(-5, 5), ang(-kPi, kPi), step(-0.4, 0.4);
+  for (int i = 0; i < 500; ++i) {
+    const Pose2 o1(pos(rng), pos(rng), ang(rng));
+    const Pose2 o2 = compose(o1, Pose2(step(rng), step(rng), step(rng)));
+    const OdometryControl u = controlFromOdometry(o1, o2);
+    // Applying u to the first odometry pose lands on the second: the model
+    // loses nothing of a general motion.
+    EXPECT_LT(maxAbsDifference(applyControl(o1, u), o2), 1e-12);
+    // And the same u moves any other starting pose by the same relative motion.
+    const Pose2 slam(1.0, 2.0, 0.3);
+    EXPECT_LT(maxAbsDifference(between(slam, applyControl(slam, u)), between(o1, o2)), 1e-12);
+  }
+}
+
+TEST(OdometryMotionModel, BackingUpIsANegativeTranslationNotAHalfTurn) {
+  const Pose2 o1(0, 0, 0.2);
+  const Pose2 o2 = compose(o1, Pose2(-0.3, 0.01, 0.0));
+  const OdometryControl u = controlFromOdometry(o1, o2);
+  EXPECT_LT(u.trans, 0.0);
+  EXPECT_LT(std::abs(u.rot1), 0.1);
+  EXPECT_LT(std::abs(u.rot2), 0.1);
+}
+
+TEST(OdometryMotionModel, PureRotationHasNoTranslation) {
+  const OdometryControl u = controlFromOdometry(Pose2(1, 1, 0.5), Pose2(1, 1, 1.2));
+  EXPECT_DOUBLE_EQ(u.trans, 0.0);
+  EXPECT_NEAR(u.rot1 + u.rot2, 0.7, 1e-12);
+}
+
+class MotionJacobians : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Headings, MotionJacobians,
+                         ::testing::Values(0.0, 1.2, -2.5, kPi - 1e-3, -kPi + 1e-3));
+
+TEST_P(MotionJacobians, FAndGMatchCentralDifferences) {
+  const Pose2 pose(0.3, -0.2, GetParam());
+  const OdometryControl u{0.2, 0.45, -0.1};
+  Matrix3 F, G;
+  applyControl(pose, u, &F, &G);
+  VectorXd v(6);
+  v << pose.vector(), u.vector();
+  const auto f = [](const VectorXd& s) -> VectorXd {
+    return applyControl(Pose2::fromVector(s.head<3>()), OdometryControl{s(3), s(4), s(5)}).vector();
+  };
+  const MatrixXd J = numericalJacobian(f, v, {2});
+  EXPECT_TRUE(near(F, J.leftCols<3>(), kTol));
+  EXPECT_TRUE(near(G, J.rightCols<3>(), kTol));
+}
+
+TEST(OdometryMotionModel, NoiseGrowsWithMotionAndValidates) {
+  MotionNoiseOptions noise;
+  EXPECT_EQ(noise.validate(), "");
+  const Matrix3 q_small = controlCovariance({0.01, 0.05, 0.0}, noise);
+  const Matrix3 q_large = controlCovariance({0.2, 0.5, 0.1}, noise);
+  for (int i = 0; i < 3; ++i) EXPECT_GT(q_large(i, i), q_small(i, i));
+  EXPECT_TRUE(controlCovariance({}, noise).isZero());
+  noise.trans_per_trans = -1.0;
+  EXPECT_NE(noise.validate().find("trans_per_trans"), std::string::npos);
+}
+
+struct ObservationCase {
+  Pose2 robot;
+  Pose2 laser;
+  Vector2 landmark;
+};
+
+class ObservationJacobians : public ::testing::TestWithParam<ObservationCase> {};
+
+// Bearings just either side of ±π (landmark behind the sensor), landmarks a
+// few centimetres from the sensor, an offset and rotated laser mount.
+INSTANTIATE_TEST_SUITE_P(
+    Geometry, ObservationJacobians,
+    ::testing::Values(
+        ObservationCase{Pose2(0, 0, 0), Pose2(), Vector2(3, 1)},
+        ObservationCase{Pose2(1, 2, 0.3), Pose2(0.2, 0.0, 0.0), Vector2(-4, 2.001)},
+        ObservationCase{Pose2(0, 0, 0), Pose2(), Vector2(-3, 1e-4)},
+        ObservationCase{Pose2(0, 0, 0), Pose2(), Vector2(-3, -1e-4)},
+        ObservationCase{Pose2(0.5, 0.5, kPi - 1e-4), Pose2(0.1, -0.05, 0.02), Vector2(0.55, 0.52)},
+        ObservationCase{Pose2(-2, 3, -1.0), Pose2(0.16, 0.0, kPi), Vector2(-1.0, 2.0)}));
+
+TEST_P(ObservationJacobians, HAndInverseMatchCentralDifferences) {
+  const ObservationCase& c = GetParam();
+  RangeBearing z;
+  Matrix23 H_r;
+  Matrix2 H_m;
+  ASSERT_TRUE(predictPointObservation(c.robot, c.laser, c.landmark, &z, &H_r, &H_m));
+  VectorXd v(5);
+  v << c.robot.vector(), c.landmark;
+  const Pose2 laser = c.laser;
+  const auto h = [&laser](const VectorXd& s) -> VectorXd {
+    RangeBearing out;
+    predictPointObservation(Pose2::fromVector(s.head<3>()), laser, s.tail<2>(), &out);
+    return out.vector();
+  };
+  // A small step: near-sensor landmarks have large second derivatives.
+  const MatrixXd J = numericalJacobian(h, v, {1}, 1e-7);
+  EXPECT_TRUE(near(H_r, J.leftCols<3>(), 1e-5));
+  EXPECT_TRUE(near(H_m, J.rightCols<2>(), 1e-5));
+
+  // The inverse model returns the landmark and its Jacobians are right.
+  Matrix23 G_r;
+  Matrix2 G_z;
+  const Vector2 m = landmarkFromObservation(c.robot, c.laser, z, &G_r, &G_z);
+  EXPECT_LT((m - c.landmark).norm(), 1e-9);
+  VectorXd w(5);
+  w << c.robot.vector(), z.vector();
+  const auto g = [&laser](const VectorXd& s) -> VectorXd {
+    return landmarkFromObservation(Pose2::fromVector(s.head<3>()), laser, {s(3), s(4)});
+  };
+  const MatrixXd K = numericalJacobian(g, w, {}, 1e-7);
+  EXPECT_TRUE(near(G_r, K.leftCols<3>(), 1e-5));
+  EXPECT_TRUE(near(G_z, K.rightCols<2>(), 1e-5));
+}
+
+TEST(PointObservationModel, BearingIsMeasuredInTheLaserFrame) {
+  // Robot at origin facing +y, laser mounted 0.2 m ahead: a landmark 1 m
+  // ahead of the laser is at range 1, bearing 0.
+  RangeBearing z;
+  ASSERT_TRUE(predictPointObservation(Pose2(0, 0, kPi / 2), Pose2(0.2, 0, 0), Vector2(0, 1.2), &z));
+  EXPECT_NEAR(z.range, 1.0, 1e-12);
+  EXPECT_NEAR(z.bearing, 0.0, 1e-12);
+  // A landmark at the sensor origin has no bearing: refused, not NaN.
+  EXPECT_FALSE(predictPointObservation(Pose2(), Pose2(), Vector2(0, 0), &z));
+}
+
+}  // namespace
+}  // namespace ekf_slam
