@@ -1,0 +1,71 @@
+// Data association of point observations to map landmarks (thesis §4.2.3),
+// explainable: every decision carries its candidates and distances.
+//
+// Individual compatibility: dᵢⱼ² = νᵢⱼᵀ Sᵢⱼ⁻¹ νᵢⱼ < gate = χ²₂(gate_probability).
+// Nearest neighbour ranks candidates by the normalised distance
+// dᵢⱼ² + ln|Sᵢⱼ| (which, unlike d² alone, does not favour landmarks that are
+// merely uncertain) and assigns greedily, each landmark at most once per scan.
+// Joint Compatibility Branch and Bound (Neira & Tardós 2001) instead searches
+// for the largest set of pairings whose stacked innovation passes the joint
+// gate χ²_{2p}, breaking ties by the joint distance.
+// An observation with no candidate inside the gate becomes a new landmark
+// only when its smallest d² exceeds the larger new-landmark gate; in between
+// it is left out (neither matched nor added), which avoids duplicates.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/filter/ekf_slam.h"
+
+namespace ekf_slam {
+
+enum class AssociationMethod { kNearestNeighbour, kJointCompatibility };
+
+struct AssociationOptions {
+  AssociationMethod method = AssociationMethod::kNearestNeighbour;
+  double gate_probability = 0.99;             // association gate, χ²₂ quantile
+  double new_landmark_probability = 0.99999;  // beyond this gate: new landmark
+  int jcbb_max_nodes = 20000;                 // search budget; best so far when exhausted
+  int max_candidates_reported = 5;            // per observation, for the report
+
+  std::string validate() const;
+};
+
+struct AssociationCandidate {
+  int landmark_id = -1;
+  double mahalanobis2 = 0.0;  // d² = νᵀ S⁻¹ ν
+  double normalised = 0.0;    // d² + ln|S|
+};
+
+enum class AssociationDecision {
+  kMatched,      // paired with landmark_id
+  kNewLandmark,  // outside the new-landmark gate of every landmark
+  kAmbiguous,    // between the gates, or lost the landmark to a better observation
+  kInvalid,      // non-finite observation or covariance
+};
+
+const char* toString(AssociationDecision decision);
+
+struct ObservationAssociation {
+  AssociationDecision decision = AssociationDecision::kInvalid;
+  int landmark_id = -1;                          // when matched
+  double mahalanobis2 = 0.0;                     // of the match, or smallest d² otherwise
+  std::vector<AssociationCandidate> candidates;  // best first, within the new-landmark gate
+};
+
+struct AssociationResult {
+  std::vector<ObservationAssociation> observations;  // one per input observation
+  double gate = 0.0;                                 // χ² threshold used for matching
+  double new_landmark_gate = 0.0;
+  int jcbb_nodes = 0;  // nodes expanded by JCBB (0 for NN)
+
+  std::vector<PointMatch> matches() const;
+  std::vector<int> newLandmarks() const;  // observation indices
+};
+
+AssociationResult associate(const EkfSlam& filter,
+                            const std::vector<PointObservation>& observations,
+                            const AssociationOptions& options);
+
+}  // namespace ekf_slam

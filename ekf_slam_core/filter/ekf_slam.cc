@@ -1,0 +1,295 @@
+#include "ekf_slam_core/filter/ekf_slam.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace ekf_slam {
+namespace {
+
+bool isFiniteMatrix(const Eigen::Ref<const Eigen::MatrixXd>& m) { return m.allFinite(); }
+
+// A 2×2 covariance must be finite, symmetric and positive definite.
+bool isValidCovariance2(const Matrix2& c) {
+  return c.allFinite() && std::abs(c(0, 1) - c(1, 0)) <= 1e-9 * (1.0 + c.cwiseAbs().maxCoeff()) &&
+         c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
+}
+
+}  // namespace
+
+const char* toString(FilterStatus status) {
+  switch (status) {
+    case FilterStatus::kOk:
+      return "ok";
+    case FilterStatus::kNonFiniteInput:
+      return "non-finite input";
+    case FilterStatus::kBadTimeStep:
+      return "time step not positive";
+    case FilterStatus::kOdometryJump:
+      return "odometry jump beyond bounds";
+    case FilterStatus::kSingularInnovation:
+      return "innovation covariance not positive definite";
+    case FilterStatus::kUnknownLandmark:
+      return "unknown landmark";
+    case FilterStatus::kBadObservation:
+      return "observation undefined (landmark at sensor origin)";
+  }
+  return "unknown status";
+}
+
+std::string FilterOptions::validate() const {
+  const std::string noise = motion_noise.validate();
+  if (!noise.empty()) return noise;
+  if (!laser_pose.allFinite()) return "laser_pose must be finite";
+  if (!(max_step_translation > 0.0)) return "max_step_translation must be > 0 (m)";
+  if (!(max_step_rotation > 0.0)) return "max_step_rotation must be > 0 (rad)";
+  if (tentative_max_age < 0) return "tentative_max_age must be >= 0 (steps)";
+  return "";
+}
+
+EkfSlam::EkfSlam(const FilterOptions& options, const Pose2& initial_pose,
+                 const Matrix3& initial_covariance)
+    : options_(options) {
+  assert(options_.validate().empty());
+  reserve(64);
+  x_.head<3>() = initial_pose.vector();
+  P_.topLeftCorner<3, 3>() = 0.5 * (initial_covariance + initial_covariance.transpose());
+}
+
+void EkfSlam::reserve(int dim) {
+  if (x_.size() >= dim) return;
+  const int capacity = std::max(dim, static_cast<int>(2 * x_.size()));
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(capacity);
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(capacity, capacity);
+  if (x_.size() > 0) {
+    x.head(dim_) = x_.head(dim_);
+    P.topLeftCorner(dim_, dim_) = P_.topLeftCorner(dim_, dim_);
+  }
+  x_.swap(x);
+  P_.swap(P);
+}
+
+int EkfSlam::slotOf(int id) const {
+  const auto it = slot_of_id_.find(id);
+  return it == slot_of_id_.end() ? -1 : it->second;
+}
+
+FilterStatus EkfSlam::predict(const Pose2& odom_previous, const Pose2& odom_current, double dt) {
+  if (!odom_previous.allFinite() || !odom_current.allFinite()) return FilterStatus::kNonFiniteInput;
+  return predict(controlFromOdometry(odom_previous, odom_current), dt);
+}
+
+FilterStatus EkfSlam::predict(const OdometryControl& u, double dt) {
+  if (!u.allFinite() || !std::isfinite(dt)) return FilterStatus::kNonFiniteInput;
+  if (!(dt > 0.0)) return FilterStatus::kBadTimeStep;
+  if (std::abs(u.trans) > options_.max_step_translation ||
+      std::abs(u.rot1) + std::abs(u.rot2) > options_.max_step_rotation) {
+    return FilterStatus::kOdometryJump;
+  }
+  Matrix3 F, G;
+  const Pose2 predicted = applyControl(pose(), u, &F, &G);
+  const Matrix3 Q = controlCovariance(u, options_.motion_noise);
+
+  x_.head<3>() = predicted.vector();
+  const int m = dim_ - kPoseDim;
+  // Only the robot rows/columns change: P_rr = F P_rr Fᵀ + G Q Gᵀ, P_rm = F P_rm.
+  const Matrix3 P_rr = P_.topLeftCorner<3, 3>();
+  const Matrix3 P_rr_new = F * P_rr * F.transpose() + G * Q * G.transpose();
+  P_.topLeftCorner<3, 3>() = 0.5 * (P_rr_new + P_rr_new.transpose());  // exactly symmetric
+  if (m > 0) {
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> P_rm = F * P_.block(0, kPoseDim, 3, m);
+    P_.block(0, kPoseDim, 3, m) = P_rm;
+    P_.block(kPoseDim, 0, m, 3) = P_rm.transpose();
+  }
+  ++step_;
+  return FilterStatus::kOk;
+}
+
+bool EkfSlam::predictObservation(int slot, Prediction* out) const {
+  assert(slot >= 0 && slot < landmarkCount());
+  const int j = landmarkIndex(slot);
+  if (!predictPointObservation(pose(), options_.laser_pose, landmarkPosition(slot), &out->z,
+                               &out->H_robot, &out->H_landmark)) {
+    return false;
+  }
+  const Matrix23& Hr = out->H_robot;
+  const Matrix2& Hm = out->H_landmark;
+  const Matrix2 cross = Hr * P_.block<3, 2>(0, j) * Hm.transpose();
+  out->HPHt = Hr * P_.topLeftCorner<3, 3>() * Hr.transpose() + cross + cross.transpose() +
+              Hm * P_.block<2, 2>(j, j) * Hm.transpose();
+  return true;
+}
+
+FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
+                             const std::vector<PointMatch>& matches, std::vector<double>* nis) {
+  const int k = static_cast<int>(matches.size());
+  if (k == 0) {
+    if (nis) nis->clear();
+    return FilterStatus::kOk;
+  }
+  // Validate everything before touching the state.
+  std::vector<int> slots(k);
+  std::vector<Prediction> predictions(k);
+  std::vector<char> landmark_used(landmarkCount(), 0);
+  for (int i = 0; i < k; ++i) {
+    const PointMatch& match = matches[i];
+    if (match.observation < 0 || match.observation >= static_cast<int>(observations.size())) {
+      return FilterStatus::kBadObservation;
+    }
+    const PointObservation& obs = observations[match.observation];
+    if (!std::isfinite(obs.z.range) || !std::isfinite(obs.z.bearing)) {
+      return FilterStatus::kNonFiniteInput;
+    }
+    if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+    slots[i] = slotOf(match.landmark_id);
+    if (slots[i] < 0) return FilterStatus::kUnknownLandmark;
+    if (landmark_used[slots[i]]) return FilterStatus::kBadObservation;  // one match per landmark
+    landmark_used[slots[i]] = 1;
+    if (!predictObservation(slots[i], &predictions[i])) return FilterStatus::kBadObservation;
+  }
+
+  const int n = dim_;
+  auto P = P_.topLeftCorner(n, n);
+  // P Hᵀ (n × 2k) from the sparse H: only robot and one landmark column block each.
+  Eigen::MatrixXd PHt(n, 2 * k);
+  for (int i = 0; i < k; ++i) {
+    const int j = landmarkIndex(slots[i]);
+    PHt.middleCols<2>(2 * i).noalias() = P.leftCols<3>() * predictions[i].H_robot.transpose();
+    PHt.middleCols<2>(2 * i).noalias() +=
+        P.middleCols<2>(j) * predictions[i].H_landmark.transpose();
+  }
+  // S = H P Hᵀ + R (2k × 2k), innovation ν.
+  Eigen::MatrixXd S(2 * k, 2 * k);
+  Eigen::VectorXd innovation(2 * k);
+  for (int i = 0; i < k; ++i) {
+    const int j = landmarkIndex(slots[i]);
+    S.middleRows<2>(2 * i).noalias() = predictions[i].H_robot * PHt.topRows<3>();
+    S.middleRows<2>(2 * i).noalias() += predictions[i].H_landmark * PHt.middleRows<2>(j);
+    const PointObservation& obs = observations[matches[i].observation];
+    S.block<2, 2>(2 * i, 2 * i) += obs.covariance;
+    innovation(2 * i) = obs.z.range - predictions[i].z.range;
+    innovation(2 * i + 1) = wrapAngle(obs.z.bearing - predictions[i].z.bearing);
+  }
+  S = 0.5 * (S + S.transpose()).eval();
+  if (!isFiniteMatrix(S)) return FilterStatus::kNonFiniteInput;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
+    return FilterStatus::kSingularInnovation;
+  }
+
+  if (nis) {
+    nis->resize(k);
+    for (int i = 0; i < k; ++i) {
+      const Eigen::Vector2d v = innovation.segment<2>(2 * i);
+      (*nis)[i] = v.dot(S.block<2, 2>(2 * i, 2 * i).ldlt().solve(v));
+    }
+  }
+
+  // With S = L Lᵀ and W = P Hᵀ L⁻ᵀ:  x += W L⁻¹ ν,  P −= W Wᵀ.
+  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // 2k × n
+  const Eigen::VectorXd whitened = llt.matrixL().solve(innovation);
+  x_.head(n).noalias() += Wt.transpose() * whitened;
+  x_(2) = wrapAngle(x_(2));
+  P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
+  mirrorLowerToUpper();
+
+  for (int i = 0; i < k; ++i) {
+    LandmarkInfo& info = landmarks_[slots[i]];
+    ++info.observations;
+    info.last_seen_step = step_;
+  }
+  return FilterStatus::kOk;
+}
+
+void EkfSlam::mirrorLowerToUpper() {
+  const int n = dim_;
+  for (int c = 1; c < n; ++c) {
+    P_.col(c).head(c) = P_.row(c).head(c).transpose();
+  }
+}
+
+FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) {
+  if (!std::isfinite(observation.z.range) || !std::isfinite(observation.z.bearing)) {
+    return FilterStatus::kNonFiniteInput;
+  }
+  if (!isValidCovariance2(observation.covariance)) return FilterStatus::kSingularInnovation;
+  if (!(observation.z.range > 0.0)) return FilterStatus::kBadObservation;
+
+  Matrix23 G_r;
+  Matrix2 G_z;
+  const Vector2 m = landmarkFromObservation(pose(), options_.laser_pose, observation.z, &G_r, &G_z);
+  const int n = dim_;
+  reserve(n + kLandmarkDim);
+  // New rows: P_m,all = G_r P_r,all;  P_mm = G_r P_rr G_rᵀ + G_z R G_zᵀ.
+  const Eigen::Matrix<double, 2, Eigen::Dynamic> cross = G_r * P_.block(0, 0, 3, n);
+  x_.segment<2>(n) = m;
+  P_.block(n, 0, 2, n) = cross;
+  P_.block(0, n, n, 2) = cross.transpose();
+  const Matrix2 P_mm = G_r * P_.topLeftCorner<3, 3>() * G_r.transpose() +
+                       G_z * observation.covariance * G_z.transpose();
+  P_.block<2, 2>(n, n) = 0.5 * (P_mm + P_mm.transpose());
+  dim_ = n + kLandmarkDim;
+
+  LandmarkInfo info;
+  info.id = next_id_++;
+  info.observations = 1;
+  info.created_step = step_;
+  info.last_seen_step = step_;
+  slot_of_id_[info.id] = landmarkCount();
+  landmarks_.push_back(info);
+  if (new_id) *new_id = info.id;
+  return FilterStatus::kOk;
+}
+
+int EkfSlam::pruneTentative() {
+  if (options_.tentative_max_age <= 0) return 0;
+  std::vector<int> slots;
+  for (int s = 0; s < landmarkCount(); ++s) {
+    const LandmarkInfo& info = landmarks_[s];
+    if (info.observations <= 1 && step_ - info.created_step >= options_.tentative_max_age) {
+      slots.push_back(s);
+    }
+  }
+  removeSlots(slots);
+  return static_cast<int>(slots.size());
+}
+
+bool EkfSlam::removeLandmark(int id) {
+  const int slot = slotOf(id);
+  if (slot < 0) return false;
+  removeSlots({slot});
+  return true;
+}
+
+void EkfSlam::removeSlots(const std::vector<int>& slots) {
+  if (slots.empty()) return;
+  std::vector<char> drop(landmarkCount(), 0);
+  for (int s : slots) drop[s] = 1;
+  std::vector<int> keep_index = {0, 1, 2};
+  std::vector<LandmarkInfo> kept;
+  for (int s = 0; s < landmarkCount(); ++s) {
+    if (drop[s]) continue;
+    keep_index.push_back(landmarkIndex(s));
+    keep_index.push_back(landmarkIndex(s) + 1);
+    kept.push_back(landmarks_[s]);
+  }
+  const int n = static_cast<int>(keep_index.size());
+  const Eigen::VectorXd x = x_.head(dim_)(keep_index);
+  const Eigen::MatrixXd P = P_.topLeftCorner(dim_, dim_)(keep_index, keep_index);
+  x_.head(n) = x;
+  P_.topLeftCorner(n, n) = P;
+  dim_ = n;
+  landmarks_ = std::move(kept);
+  slot_of_id_.clear();
+  for (int s = 0; s < landmarkCount(); ++s) slot_of_id_[landmarks_[s].id] = s;
+}
+
+double EkfSlam::poseNees(const Pose2& truth) const {
+  Vector3 error = truth.vector() - x_.head<3>();
+  error(2) = wrapAngle(error(2));
+  return error.dot(poseCovariance().ldlt().solve(error));
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,132 @@
+// EKF-SLAM with point landmarks (thesis Ch. 2–4): the joint state of the
+// robot pose and the landmark positions in the map frame, its covariance,
+// and the four stages predict / (observe) / update / augment.
+//
+// State layout (use the helpers, never bare indices):
+//   x = [x_r (kPoseDim = 3: x, y, θ) | m_0 (2) | m_1 (2) | …]
+//   landmarkIndex(slot) = kPoseDim + kLandmarkDim · slot
+// Landmarks keep a stable id; their slot changes when others are removed.
+//
+// Cost per operation with n = state size and k matched observations:
+//   predict O(n) (only the robot rows/columns change), augment O(n),
+//   update O(n²k) through a symmetric rank-2k downdate of P (no Joseph
+//   product, no n×n×n multiply; P stays symmetric by construction).
+//
+// Every operation validates its input. On any status other than kOk the
+// state is unchanged, so a caller can count, log and carry on.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "ekf_slam_core/filter/filter_status.h"
+#include "ekf_slam_core/models/odometry_motion_model.h"
+#include "ekf_slam_core/models/point_observation_model.h"
+
+namespace ekf_slam {
+
+struct FilterOptions {
+  MotionNoiseOptions motion_noise;
+  Pose2 laser_pose;                      // base_link → laser (m, rad)
+  double max_step_translation = 1.0;     // m: a larger odometry increment is a jump
+  double max_step_rotation = kPi / 2.0;  // rad: |rot1| + |rot2| beyond this is a jump
+  long tentative_max_age = 10;           // steps a once-seen landmark may wait; 0 = keep all
+
+  std::string validate() const;  // empty when valid, else names the bad field
+};
+
+// A point feature measured in the laser frame.
+struct PointObservation {
+  RangeBearing z;
+  Matrix2 covariance = Matrix2::Identity();  // of (range m, bearing rad): m², m·rad, rad²
+};
+
+struct LandmarkInfo {
+  int id = -1;
+  int observations = 0;     // the creating observation plus every accepted match
+  long created_step = 0;    // filter step at augmentation
+  long last_seen_step = 0;  // filter step of the last match
+};
+
+struct PointMatch {
+  int observation = -1;  // index into the observation vector
+  int landmark_id = -1;
+};
+
+class EkfSlam {
+ public:
+  static constexpr int kPoseDim = 3;
+  static constexpr int kLandmarkDim = 2;
+  static constexpr int landmarkIndex(int slot) { return kPoseDim + kLandmarkDim * slot; }
+
+  // Options must be valid (check options.validate() first); the initial
+  // covariance must be symmetric PSD.
+  explicit EkfSlam(const FilterOptions& options, const Pose2& initial_pose = Pose2(),
+                   const Matrix3& initial_covariance = Matrix3::Zero());
+
+  // Prediction from two successive odometry poses (§3.4.2) over dt seconds.
+  // Starts a new step (the step counter drives landmark bookkeeping).
+  FilterStatus predict(const Pose2& odom_previous, const Pose2& odom_current, double dt);
+  FilterStatus predict(const OdometryControl& u, double dt);
+
+  struct Prediction {
+    RangeBearing z;      // predicted observation
+    Matrix23 H_robot;    // ∂z/∂x_r
+    Matrix2 H_landmark;  // ∂z/∂m
+    Matrix2 HPHt;        // H P Hᵀ: innovation covariance without the sensor noise
+  };
+  // Predicted observation of the landmark in `slot`; false when undefined
+  // (landmark at the sensor origin).
+  bool predictObservation(int slot, Prediction* out) const;
+
+  // Batch update with all matched observations of a scan. On success `nis`
+  // (if given) receives νᵢᵀ Sᵢ⁻¹ νᵢ of each match, in the order of `matches`.
+  FilterStatus update(const std::vector<PointObservation>& observations,
+                      const std::vector<PointMatch>& matches, std::vector<double>* nis = nullptr);
+
+  // Adds a new landmark with full cross-covariances (§4.2.4).
+  FilterStatus augment(const PointObservation& observation, int* new_id = nullptr);
+
+  // Removes landmarks seen only once whose age exceeds
+  // options().tentative_max_age steps. Returns how many were removed.
+  int pruneTentative();
+  bool removeLandmark(int id);
+
+  Pose2 pose() const { return Pose2(x_(0), x_(1), x_(2)); }
+  Matrix3 poseCovariance() const { return P_.topLeftCorner<3, 3>(); }
+  int landmarkCount() const { return static_cast<int>(landmarks_.size()); }
+  int stateDim() const { return dim_; }
+  int slotOf(int id) const;  // -1 when no landmark has this id
+  Vector2 landmarkPosition(int slot) const { return x_.segment<2>(landmarkIndex(slot)); }
+  Matrix2 landmarkCovariance(int slot) const {
+    return P_.block<2, 2>(landmarkIndex(slot), landmarkIndex(slot));
+  }
+  const std::vector<LandmarkInfo>& landmarks() const { return landmarks_; }
+  Eigen::Ref<const Eigen::VectorXd> state() const { return x_.head(dim_); }
+  Eigen::Ref<const Eigen::MatrixXd> covariance() const { return P_.topLeftCorner(dim_, dim_); }
+  long step() const { return step_; }
+  const FilterOptions& options() const { return options_; }
+
+  // Normalised estimation error squared of the pose against ground truth.
+  double poseNees(const Pose2& truth) const;
+
+ private:
+  void reserve(int dim);
+  void mirrorLowerToUpper();
+  void removeSlots(const std::vector<int>& slots);
+
+  FilterOptions options_;
+  // Storage with spare capacity so that augmentation does not reallocate the
+  // n×n matrix every time; only the leading dim_ rows/columns are live.
+  Eigen::VectorXd x_;
+  Eigen::MatrixXd P_;
+  int dim_ = kPoseDim;
+  std::vector<LandmarkInfo> landmarks_;  // by slot
+  std::unordered_map<int, int> slot_of_id_;
+  int next_id_ = 0;
+  long step_ = 0;
+};
+
+}  // namespace ekf_slam

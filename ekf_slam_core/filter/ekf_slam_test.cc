@@ -1,0 +1,260 @@
+#include "ekf_slam_core/filter/ekf_slam.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <random>
+
+#include "ekf_slam_core/sim/landmark_simulator.h"
+
+namespace ekf_slam {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+FilterOptions testOptions() {
+  FilterOptions options;
+  options.laser_pose = Pose2(0.1, 0.02, 0.05);
+  options.tentative_max_age = 0;
+  return options;
+}
+
+PointObservation observation(double range, double bearing) {
+  PointObservation obs;
+  obs.z = {range, bearing};
+  obs.covariance << 0.01 * 0.01, 0.0, 0.0, 0.01 * 0.01;
+  return obs;
+}
+
+// A filter with a few landmarks and correlated covariance, built by running
+// real iterations (predict / augment / update) so that P has structure.
+EkfSlam builtFilter() {
+  EkfSlam filter(testOptions(), Pose2(0.5, -0.2, 0.3), Matrix3::Identity() * 0.01);
+  EXPECT_EQ(filter.augment(observation(2.0, 0.4)), FilterStatus::kOk);
+  EXPECT_EQ(filter.augment(observation(3.0, -0.7)), FilterStatus::kOk);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(0.3, 0.05, 0.1), 0.2), FilterStatus::kOk);
+  EXPECT_EQ(filter.augment(observation(1.5, 1.2)), FilterStatus::kOk);
+  EXPECT_EQ(filter.update({observation(1.75, 0.33)}, {{0, 0}}), FilterStatus::kOk);
+  return filter;
+}
+
+MatrixXd denseCovariance(const EkfSlam& f) { return f.covariance(); }
+
+TEST(EkfSlam, PredictEqualsTheFullJacobianProduct) {
+  EkfSlam filter = builtFilter();
+  const VectorXd x0 = filter.state();
+  const MatrixXd P0 = denseCovariance(filter);
+  const Pose2 o1(1.0, 1.0, 0.2), o2 = compose(o1, Pose2(0.25, -0.03, 0.12));
+  ASSERT_EQ(filter.predict(o1, o2, 0.1), FilterStatus::kOk);
+
+  // Textbook eq. 2.62: P' = F_x P F_xᵀ + G Q Gᵀ with F_x = diag(F, I).
+  const OdometryControl u = controlFromOdometry(o1, o2);
+  Matrix3 F, G;
+  applyControl(Pose2::fromVector(x0.head<3>()), u, &F, &G);
+  MatrixXd Fx = MatrixXd::Identity(x0.size(), x0.size());
+  Fx.topLeftCorner<3, 3>() = F;
+  MatrixXd expected = Fx * P0 * Fx.transpose();
+  expected.topLeftCorner<3, 3>() +=
+      G * controlCovariance(u, testOptions().motion_noise) * G.transpose();
+  EXPECT_LT((denseCovariance(filter) - expected).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_EQ(filter.state().tail(x0.size() - 3), x0.tail(x0.size() - 3));
+}
+
+TEST(EkfSlam, BatchUpdateEqualsTheTextbookUpdate) {
+  EkfSlam filter = builtFilter();
+  const VectorXd x0 = filter.state();
+  const MatrixXd P0 = denseCovariance(filter);
+  const std::vector<PointObservation> obs = {observation(2.1, 0.35), observation(2.9, -0.68)};
+  const std::vector<PointMatch> matches = {{0, 0}, {1, 1}};
+
+  // Dense reference: stacked H, S = H P Hᵀ + R, K = P Hᵀ S⁻¹, P' = (I − K H) P.
+  const int n = x0.size();
+  MatrixXd H = MatrixXd::Zero(4, n);
+  MatrixXd R = MatrixXd::Zero(4, 4);
+  VectorXd nu(4);
+  for (int i = 0; i < 2; ++i) {
+    EkfSlam::Prediction p;
+    ASSERT_TRUE(filter.predictObservation(i, &p));
+    H.block<2, 3>(2 * i, 0) = p.H_robot;
+    H.block<2, 2>(2 * i, EkfSlam::landmarkIndex(i)) = p.H_landmark;
+    R.block<2, 2>(2 * i, 2 * i) = obs[i].covariance;
+    nu(2 * i) = obs[i].z.range - p.z.range;
+    nu(2 * i + 1) = wrapAngle(obs[i].z.bearing - p.z.bearing);
+  }
+  const MatrixXd S = H * P0 * H.transpose() + R;
+  const MatrixXd K = P0 * H.transpose() * S.inverse();
+  VectorXd x_expected = x0 + K * nu;
+  const MatrixXd P_expected = (MatrixXd::Identity(n, n) - K * H) * P0;
+
+  std::vector<double> nis;
+  ASSERT_EQ(filter.update(obs, matches, &nis), FilterStatus::kOk);
+  VectorXd dx = filter.state() - x_expected;
+  dx(2) = wrapAngle(dx(2));
+  EXPECT_LT(dx.cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((denseCovariance(filter) - P_expected).cwiseAbs().maxCoeff(), 1e-12);
+  const MatrixXd P1 = denseCovariance(filter);
+  EXPECT_EQ(P1, P1.transpose()) << "P must be exactly symmetric";
+  ASSERT_EQ(nis.size(), 2u);
+  const Eigen::Vector2d nu0 = nu.head<2>();
+  EXPECT_NEAR(nis[0], nu0.dot(S.topLeftCorner<2, 2>().inverse() * nu0), 1e-9);
+}
+
+TEST(EkfSlam, AugmentEqualsTheFullJacobianProduct) {
+  EkfSlam filter = builtFilter();
+  const MatrixXd P0 = denseCovariance(filter);
+  const int n = P0.rows();
+  const PointObservation obs = observation(2.5, -0.2);
+  Matrix23 G_r;
+  Matrix2 G_z;
+  landmarkFromObservation(filter.pose(), testOptions().laser_pose, obs.z, &G_r, &G_z);
+  int id = -1;
+  ASSERT_EQ(filter.augment(obs, &id), FilterStatus::kOk);
+  EXPECT_EQ(id, 3);
+
+  // P_aug = J P Jᵀ + N R Nᵀ, J = [I; G_r 0], N = [0; G_z]  (eq. 2.82–2.83).
+  MatrixXd J = MatrixXd::Zero(n + 2, n);
+  J.topRows(n) = MatrixXd::Identity(n, n);
+  J.block<2, 3>(n, 0) = G_r;
+  MatrixXd N = MatrixXd::Zero(n + 2, 2);
+  N.bottomRows<2>() = G_z;
+  const MatrixXd expected = J * P0 * J.transpose() + N * obs.covariance * N.transpose();
+  EXPECT_LT((denseCovariance(filter) - expected).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_EQ(filter.landmarkCount(), 4);
+  EXPECT_EQ(filter.slotOf(id), 3);
+}
+
+TEST(EkfSlam, CovarianceStaysSymmetricPsdOverTenThousandSteps) {
+  sim::LandmarkSimOptions sim_options;
+  sim_options.laps = 1000;  // ends by the step limit below
+  sim::LandmarkSimulator sim(sim_options);
+  FilterOptions options;
+  options.laser_pose = sim_options.laser_pose;
+  options.tentative_max_age = 0;
+  EkfSlam filter(options, sim.current().true_pose);
+  std::vector<int> id_of_true(sim.landmarks().size(), -1);
+  Pose2 odom = sim.current().odometry;
+  double worst = 0.0;
+  for (int step = 0; step < 10000; ++step) {
+    ASSERT_TRUE(sim.next());
+    const sim::SimStep& s = sim.current();
+    ASSERT_EQ(filter.predict(odom, s.odometry, sim_options.dt), FilterStatus::kOk) << step;
+    odom = s.odometry;
+    std::vector<PointMatch> matches;
+    std::vector<int> fresh;
+    for (size_t i = 0; i < s.observations.size(); ++i) {
+      const int id = id_of_true[s.true_landmark[i]];
+      if (id >= 0) {
+        matches.push_back({static_cast<int>(i), id});
+      } else {
+        fresh.push_back(static_cast<int>(i));
+      }
+    }
+    ASSERT_EQ(filter.update(s.observations, matches), FilterStatus::kOk) << step;
+    for (int i : fresh) {
+      ASSERT_EQ(filter.augment(s.observations[i], &id_of_true[s.true_landmark[i]]),
+                FilterStatus::kOk);
+    }
+    const MatrixXd P = filter.covariance();
+    ASSERT_TRUE(P.isApprox(P.transpose(), 0.0)) << "asymmetric at step " << step;
+    const Eigen::LDLT<MatrixXd> ldlt(P);
+    const double scale = P.diagonal().maxCoeff();
+    const double min_d = ldlt.vectorD().minCoeff();
+    worst = std::min(worst, min_d / scale);
+    ASSERT_GT(min_d, -1e-9 * scale) << "P lost positive semi-definiteness at step " << step;
+  }
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(filter.covariance());
+  EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-12);
+  RecordProperty("worst_relative_ldlt_pivot", std::to_string(worst));
+}
+
+void expectUnchanged(const EkfSlam& filter, const VectorXd& x, const MatrixXd& P) {
+  EXPECT_EQ(filter.state(), x);
+  EXPECT_EQ(filter.covariance(), P);
+}
+
+TEST(EkfSlam, BadInputIsRejectedAndLeavesTheStateUnchanged) {
+  EkfSlam filter = builtFilter();
+  const VectorXd x = filter.state();
+  const MatrixXd P = filter.covariance();
+  const double nan = std::nan(""), inf = std::numeric_limits<double>::infinity();
+  const long step = filter.step();
+
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(nan, 0, 0), 0.1), FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(inf, 0, 0), 0.1), FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(0.1, 0, 0), 0.0), FilterStatus::kBadTimeStep);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(0.1, 0, 0), -0.5), FilterStatus::kBadTimeStep);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(0.1, 0, 0), nan), FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(5.0, 0, 0), 0.1), FilterStatus::kOdometryJump);
+  EXPECT_EQ(filter.predict(Pose2(), Pose2(0, 0, 3.0), 0.1), FilterStatus::kOdometryJump);
+  EXPECT_EQ(filter.step(), step);
+
+  EXPECT_EQ(filter.update({observation(nan, 0.1)}, {{0, 0}}), FilterStatus::kNonFiniteInput);
+  PointObservation singular = observation(2.0, 0.4);
+  singular.covariance.setZero();
+  EXPECT_EQ(filter.update({singular}, {{0, 0}}), FilterStatus::kSingularInnovation);
+  singular.covariance << 1.0, 2.0, 2.0, 1.0;  // indefinite
+  EXPECT_EQ(filter.update({singular}, {{0, 0}}), FilterStatus::kSingularInnovation);
+  EXPECT_EQ(filter.update({observation(2.0, 0.4)}, {{0, 42}}), FilterStatus::kUnknownLandmark);
+  EXPECT_EQ(filter.update({observation(2.0, 0.4)}, {{3, 0}}), FilterStatus::kBadObservation);
+  EXPECT_EQ(filter.update({observation(2.0, 0.4), observation(2.0, 0.4)}, {{0, 0}, {1, 0}}),
+            FilterStatus::kBadObservation)
+      << "a landmark may be matched once per batch";
+  EXPECT_EQ(filter.augment(observation(inf, 0.0)), FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.augment(singular), FilterStatus::kSingularInnovation);
+  EXPECT_EQ(filter.augment(observation(0.0, 0.0)), FilterStatus::kBadObservation);
+  expectUnchanged(filter, x, P);
+  EXPECT_EQ(filter.landmarkCount(), 3);
+}
+
+TEST(EkfSlam, TentativeLandmarksSeenOnceArePrunedOthersKept) {
+  FilterOptions options = testOptions();
+  options.tentative_max_age = 3;
+  EkfSlam filter(options, Pose2(), Matrix3::Identity() * 1e-4);
+  int clutter = -1, post = -1;
+  ASSERT_EQ(filter.augment(observation(2.0, 0.5), &clutter), FilterStatus::kOk);
+  ASSERT_EQ(filter.augment(observation(3.0, -0.5), &post), FilterStatus::kOk);
+  ASSERT_EQ(filter.augment(observation(4.0, 0.0)), FilterStatus::kOk);
+  for (int step = 0; step < 3; ++step) {
+    ASSERT_EQ(filter.predict(Pose2(), Pose2(1e-3, 0, 0), 0.1), FilterStatus::kOk);
+    if (step == 0) {
+      EkfSlam::Prediction p;
+      ASSERT_TRUE(filter.predictObservation(filter.slotOf(post), &p));
+      PointObservation again = observation(p.z.range, p.z.bearing);
+      ASSERT_EQ(filter.update({again}, {{0, post}}), FilterStatus::kOk);
+    }
+    if (step < 2) EXPECT_EQ(filter.pruneTentative(), 0);
+  }
+  EXPECT_EQ(filter.pruneTentative(), 2);  // the clutter and the third, each seen once
+  EXPECT_EQ(filter.landmarkCount(), 1);
+  EXPECT_EQ(filter.slotOf(clutter), -1);
+  EXPECT_EQ(filter.slotOf(post), 0);
+  EXPECT_EQ(filter.stateDim(), 5);
+}
+
+TEST(EkfSlam, RemovingALandmarkKeepsTheOthersJointCovariance) {
+  EkfSlam filter = builtFilter();
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  const int removed = filter.landmarks()[1].id;
+  ASSERT_TRUE(filter.removeLandmark(removed));
+  const std::vector<int> keep = {0, 1, 2, 3, 4, 7, 8};
+  EXPECT_EQ(filter.covariance(), P(keep, keep));
+  EXPECT_EQ(filter.state(), x(keep));
+  EXPECT_FALSE(filter.removeLandmark(removed));
+  EXPECT_EQ(filter.slotOf(filter.landmarks()[1].id), 1);
+}
+
+TEST(EkfSlam, OptionsValidationNamesTheField) {
+  FilterOptions options;
+  EXPECT_EQ(options.validate(), "");
+  options.max_step_translation = 0.0;
+  EXPECT_NE(options.validate().find("max_step_translation"), std::string::npos);
+  options = FilterOptions();
+  options.motion_noise.rot_per_rot = std::nan("");
+  EXPECT_NE(options.validate().find("rot_per_rot"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam

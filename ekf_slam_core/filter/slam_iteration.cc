@@ -1,0 +1,32 @@
+#include "ekf_slam_core/filter/slam_iteration.h"
+
+namespace ekf_slam {
+
+IterationReport runIteration(EkfSlam& filter, const AssociationOptions& association,
+                             const Pose2& odom_previous, const Pose2& odom_current, double dt,
+                             const std::vector<PointObservation>& observations) {
+  IterationReport report;
+  report.predict_status = filter.predict(odom_previous, odom_current, dt);
+  if (report.predict_status != FilterStatus::kOk) return report;
+
+  report.association = associate(filter, observations, association);
+  report.matches = report.association.matches();
+  report.update_status = filter.update(observations, report.matches, &report.nis);
+  if (report.update_status != FilterStatus::kOk) {
+    report.matches.clear();
+    report.nis.clear();
+  }
+  // Augment after the update so new landmarks hang off the corrected pose.
+  for (int i : report.association.newLandmarks()) {
+    int id = -1;
+    if (filter.augment(observations[i], &id) == FilterStatus::kOk) {
+      report.new_landmark_ids.push_back(id);
+    } else {
+      ++report.augment_failures;
+    }
+  }
+  report.pruned = filter.pruneTentative();
+  return report;
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,261 @@
+#include "sick_lms200_driver/emulator/lms200_emulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "sick_lms200_driver/protocol/scanner_link.h"
+#include "sick_lms200_driver/protocol/session.h"
+
+namespace sick_lms200 {
+
+Lms200Emulator::Lms200Emulator(serial_io::ByteStream& stream,
+                               const ekf_slam::sim::PolygonWorld& world, PoseSource pose_source,
+                               EmulatorOptions options)
+    : stream_(stream),
+      world_(world),
+      pose_source_(std::move(pose_source)),
+      options_(std::move(options)),
+      rng_(options_.seed),
+      baud_(options_.initial_baud),
+      angle_deg_(options_.angle_deg),
+      resolution_centideg_(options_.resolution_centideg),
+      config_(kConfigSize, 0) {
+  config_[kConfigUnitsIndex] = options_.units == Units::kMillimetres ? 1 : 0;
+}
+
+Units Lms200Emulator::units() const {
+  return config_[kConfigUnitsIndex] == 1 ? Units::kMillimetres : Units::kCentimetres;
+}
+
+bool Lms200Emulator::peerMatches() const { return !peer_baud_ || peer_baud_() == baud_; }
+
+void Lms200Emulator::spinOnce(double now) {
+  handleInput(now);
+  streamScans(now);
+  flushOutput(now);
+  if (pending_baud_ != 0 && output_.empty() && now >= line_free_at_) {
+    baud_ = pending_baud_;
+    pending_baud_ = 0;
+  }
+}
+
+double Lms200Emulator::nextDeadline(double now) const {
+  double deadline = std::numeric_limits<double>::infinity();
+  if (!output_.empty()) {
+    // Batch bytes in 2 ms slices, but wake exactly for the last queued byte
+    // (the end of a telegram, whose arrival the driver stamps).
+    deadline = std::min(line_free_at_, std::max(output_.front().first, now) + 0.002);
+  }
+  if (next_sweep_start_ >= 0.0) {
+    deadline = std::min(deadline, next_sweep_start_ + sweepTime(angle_deg_, resolution_centideg_));
+  }
+  return deadline;
+}
+
+void Lms200Emulator::handleInput(double now) {
+  uint8_t buffer[256];
+  while (true) {
+    const serial_io::ReadResult result =
+        stream_.read(buffer, sizeof(buffer), std::chrono::milliseconds(0));
+    if (result.status != serial_io::IoStatus::kOk || result.bytes == 0) break;
+    if (silent_ || !peerMatches()) {
+      garbage_heard_ += result.bytes;  // wrong rate: framing errors, nothing decoded
+      continue;
+    }
+    decoder_.feed(buffer, result.bytes);
+  }
+  DecoderEvent event;
+  while (decoder_.next(&event)) {
+    if (event.kind == DecoderEvent::Kind::kTelegram) handleRequest(event.telegram, now);
+  }
+}
+
+void Lms200Emulator::enqueue(const std::vector<uint8_t>& bytes, double start) {
+  double t = std::max(start, line_free_at_);
+  for (uint8_t byte : bytes) {
+    t += byteTime();
+    output_.emplace_back(t, byte);
+  }
+  line_free_at_ = t;
+}
+
+void Lms200Emulator::reply(uint8_t request_command, const std::vector<uint8_t>& data,
+                           double start) {
+  std::vector<uint8_t> bytes{kAck};
+  const std::vector<uint8_t> telegram =
+      encodeTelegram(kSensorAddress, static_cast<uint8_t>(request_command + kReplyOffset), data);
+  bytes.insert(bytes.end(), telegram.begin(), telegram.end());
+  enqueue(bytes, start);
+}
+
+void Lms200Emulator::handleRequest(const Telegram& request, double now) {
+  const double start = now + 0.001;  // the sensor's reaction time
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  if (options_.nak_rate > 0.0 && uniform(rng_) < options_.nak_rate) {
+    enqueue({kNak}, start);
+    return;
+  }
+  const std::vector<uint8_t>& data = request.data;
+  switch (request.command) {
+    case cmd::kModeChange: {
+      if (data.empty()) break;
+      const uint8_t mode_byte = data[0];
+      uint8_t result = 0;  // 0 = success
+      if (mode_byte == mode::kInstallation) {
+        const std::string password(data.begin() + 1, data.end());
+        if (password == kInstallationPassword) {
+          installation_mode_ = true;
+        } else {
+          result = 1;  // wrong password
+        }
+      } else if (mode_byte == mode::kContinuousAll) {
+        streaming_ = true;
+        installation_mode_ = false;
+      } else if (mode_byte == mode::kRequestOnly) {
+        streaming_ = false;
+        next_sweep_start_ = -1.0;
+        installation_mode_ = false;
+      } else if (baudForModeByte(mode_byte) != 0) {
+        pending_baud_ = baudForModeByte(mode_byte);
+      } else {
+        result = 1;  // not emulated (e.g. partial scans)
+      }
+      reply(request.command, {result, status_byte_}, start);
+      return;
+    }
+    case cmd::kStatus: {
+      std::vector<uint8_t> status(options_.type_string.begin(), options_.type_string.end());
+      status.push_back(status_byte_);
+      reply(request.command, status, start);
+      return;
+    }
+    case cmd::kTypeString: {
+      std::vector<uint8_t> type(options_.type_string.begin(), options_.type_string.end());
+      type.push_back(status_byte_);
+      reply(request.command, type, start);
+      return;
+    }
+    case cmd::kVariant: {
+      if (data.size() < 4) break;
+      const int angle = data[0] | (data[1] << 8);
+      const int res = data[2] | (data[3] << 8);
+      SessionOptions check;
+      check.angle_deg = angle;
+      check.resolution_centideg = res;
+      const bool ok = validateSessionOptions(check).empty();
+      if (ok) {
+        angle_deg_ = angle;
+        resolution_centideg_ = res;
+        next_sweep_start_ = -1.0;
+      }
+      reply(request.command,
+            {static_cast<uint8_t>(ok ? 1 : 0), data[0], data[1], data[2], data[3], status_byte_},
+            start);
+      return;
+    }
+    case cmd::kReadConfig: {
+      std::vector<uint8_t> config = config_;
+      config.push_back(status_byte_);
+      reply(request.command, config, start);
+      return;
+    }
+    case cmd::kWriteConfig: {
+      const bool ok = installation_mode_ && data.size() == kConfigSize && data[kConfigUnitsIndex] <= 1;
+      if (ok) config_ = data;
+      reply(request.command, {static_cast<uint8_t>(ok ? 1 : 0), status_byte_},
+            ok ? start + options_.config_write_delay : start);
+      return;
+    }
+    default:
+      break;
+  }
+  enqueue({kNak}, start);  // unknown or malformed request
+}
+
+void Lms200Emulator::streamScans(double now) {
+  if (!streaming_ || silent_) {
+    next_sweep_start_ = -1.0;
+    return;
+  }
+  const double sweep = sweepTime(angle_deg_, resolution_centideg_);
+  const double turns = 100.0 / resolution_centideg_;
+  if (next_sweep_start_ < 0.0) {
+    // The newest sweep that ends once the line is free; sweeps start on
+    // mirror-turn boundaries.
+    const double earliest = std::max(now, line_free_at_ - sweep);
+    next_sweep_start_ = std::ceil(earliest / (kMirrorPeriod * turns)) * (kMirrorPeriod * turns);
+  }
+  if (now < next_sweep_start_ + sweep) return;
+  if (line_free_at_ > next_sweep_start_ + sweep + 1e-9) {
+    next_sweep_start_ = -1.0;  // a reply took the line: measure a newer sweep
+    return;
+  }
+  sendScan(next_sweep_start_);
+  next_sweep_start_ = -1.0;
+}
+
+void Lms200Emulator::sendScan(double first_beam_time) {
+  TrueScan truth;
+  truth.first_beam_time = first_beam_time;
+  truth.angle_deg = angle_deg_;
+  truth.resolution_centideg = resolution_centideg_;
+  truth.baud = baud_;
+  const int partials = 100 / resolution_centideg_;
+  const int count = angle_deg_ * 100 / resolution_centideg_ + 1;
+  truth.ranges.assign(count, std::numeric_limits<double>::infinity());
+  const Units units = this->units();
+  const double max_range = maxRange(units);
+  // Each mirror turn measures one interlaced partial: beams k·res + j·1°.
+  for (int k = 0; k < partials; ++k) {
+    const double turn_start = first_beam_time + k * kMirrorPeriod;
+    ekf_slam::sim::SweepGeometry geometry;
+    geometry.angle_min = ekf_slam::degToRad(-angle_deg_ / 2.0 + k * resolution_centideg_ / 100.0);
+    geometry.angle_increment = ekf_slam::degToRad(1.0);
+    geometry.count = partialBeamCount(angle_deg_, resolution_centideg_, k);
+    geometry.max_range = max_range;
+    const std::vector<double> partial =
+        ekf_slam::sim::simulateRanges(world_, pose_source_(turn_start), geometry);
+    for (int j = 0; j < geometry.count; ++j) truth.ranges[j * partials + k] = partial[j];
+  }
+  std::normal_distribution<double> noise(0.0, options_.range_noise_sigma);
+  std::vector<uint16_t> raw(count);
+  truth.sent.resize(count);
+  for (int i = 0; i < count; ++i) {
+    double measured = truth.ranges[i];
+    if (std::isfinite(measured) && options_.range_noise_sigma > 0.0) measured += noise(rng_);
+    raw[i] = rawFromRange(measured, units);
+    truth.sent[i] = rangeFromRaw(raw[i], units);
+  }
+  std::vector<uint8_t> telegram = encodeTelegram(
+      kSensorAddress, cmd::kMeasuredValues, buildMeasuredValuesData(raw, units, 0, status_byte_));
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  if (options_.bad_crc_rate > 0.0 && uniform(rng_) < options_.bad_crc_rate) {
+    telegram[telegram.size() - 2] ^= 0x5A;
+    truth.corrupted = true;
+  }
+  if (options_.drop_byte_rate > 0.0 && uniform(rng_) < options_.drop_byte_rate) {
+    std::uniform_int_distribution<size_t> position(1, telegram.size() - 1);
+    telegram.erase(telegram.begin() + static_cast<std::ptrdiff_t>(position(rng_)));
+    truth.corrupted = true;
+  }
+  if (observer_) observer_(truth);
+  enqueue(telegram, first_beam_time + sweepTime(angle_deg_, resolution_centideg_));
+}
+
+void Lms200Emulator::flushOutput(double now) {
+  std::vector<uint8_t> due;
+  while (!output_.empty() && output_.front().first <= now) {
+    due.push_back(output_.front().second);
+    output_.pop_front();
+  }
+  if (due.empty() || silent_) return;
+  if (!peerMatches()) {
+    // The host samples our bits at another rate: it sees garbage.
+    std::uniform_int_distribution<int> byte(0, 255);
+    for (uint8_t& b : due) b = static_cast<uint8_t>(byte(rng_));
+  }
+  stream_.write(due.data(), due.size());
+}
+
+}  // namespace sick_lms200

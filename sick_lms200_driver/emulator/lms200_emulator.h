@@ -1,0 +1,122 @@
+// The scanner's side of the LMS2xx protocol, as a step-able object: it reads
+// host telegrams from a ByteStream (the master side of a pty in the
+// `lms200_emulator` executable, or anything in-process), answers them, and in
+// continuous mode streams 0xB0 scans of a PolygonWorld, paced at the rate the
+// emulated baud allows (10 bits per byte). No ROS.
+//
+// Timing model (what the driver's stamp estimate assumes): a sweep starts at
+// a mirror-turn boundary t0 (75 Hz), lasts sweepTime(), and its telegram
+// starts leaving at t0 + sweepTime(), each byte taking 10 / baud seconds. The
+// emulator reports t0 as the true first-beam time of every scan.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/sim/polygon_world.h"
+#include "serial_io/byte_stream.h"
+#include "sick_lms200_driver/protocol/measured_values.h"
+#include "sick_lms200_driver/protocol/telegram.h"
+
+namespace sick_lms200 {
+
+struct EmulatorOptions {
+  int initial_baud = 9600;            // power-on rate of a real LMS200
+  int angle_deg = 180;                // power-on variant
+  int resolution_centideg = 100;      // power-on variant (1°)
+  Units units = Units::kMillimetres;  // power-on units
+  double range_noise_sigma = 0.01;    // m, Gaussian, on ranges that hit something
+  std::string type_string = "LMS200;30106;V02.10 ;S01.31 ";
+  double config_write_delay = 0.5;    // s before the 0x77 reply (EEPROM write)
+  // Fault injection, probabilities in [0, 1].
+  double bad_crc_rate = 0.0;          // per streamed scan: checksum corrupted
+  double drop_byte_rate = 0.0;        // per streamed scan: one byte lost
+  double nak_rate = 0.0;              // per request: answered with NAK only
+  uint32_t seed = 1;
+};
+
+// Ground truth of one streamed scan.
+struct TrueScan {
+  double first_beam_time = 0.0;   // s, emulator clock
+  int angle_deg = 180;
+  int resolution_centideg = 100;
+  std::vector<double> ranges;     // m, noise-free, +inf for no return, angular order
+  std::vector<double> sent;       // m, as encoded (noise, units, reserved codes)
+  int baud = 0;                   // line speed it is sent at
+  bool corrupted = false;         // bad checksum or dropped byte injected
+};
+
+class Lms200Emulator {
+ public:
+  // Pose of the sensor (laser frame) in the world at time t (s).
+  using PoseSource = std::function<ekf_slam::Pose2(double t)>;
+  using ScanObserver = std::function<void(const TrueScan&)>;
+
+  Lms200Emulator(serial_io::ByteStream& stream, const ekf_slam::sim::PolygonWorld& world,
+                 PoseSource pose_source, EmulatorOptions options);
+
+  // The host's current line speed (e.g. PseudoTerminal::peerBaud); when it
+  // differs from the emulated baud, the emulator hears garbage and the host
+  // receives garbage, like a real sensor at another rate. Unset: always match.
+  void setPeerBaudSource(std::function<int()> peer_baud) { peer_baud_ = std::move(peer_baud); }
+  // Called when a scan starts leaving the sensor (before its bytes are sent).
+  void setScanObserver(ScanObserver observer) { observer_ = std::move(observer); }
+  // A silent sensor neither answers nor streams (cable cut on the sensor side).
+  void setSilent(bool silent) { silent_ = silent; }
+
+  // Handles input and sends every byte due by `now` (s, any monotonic-enough
+  // clock; the same clock as the reported first-beam times).
+  void spinOnce(double now);
+  // Earliest time spinOnce has output work to do (for the caller's sleep).
+  double nextDeadline(double now) const;
+
+  int baud() const { return baud_; }
+  bool streaming() const { return streaming_; }
+  int angleDeg() const { return angle_deg_; }
+  int resolutionCentideg() const { return resolution_centideg_; }
+  Units units() const;
+  uint64_t garbageBytesHeard() const { return garbage_heard_; }
+
+ private:
+  void handleInput(double now);
+  void handleRequest(const Telegram& request, double now);
+  void reply(uint8_t request_command, const std::vector<uint8_t>& data, double start);
+  void enqueue(const std::vector<uint8_t>& bytes, double start);
+  void streamScans(double now);
+  void sendScan(double first_beam_time);
+  void flushOutput(double now);
+  bool peerMatches() const;
+  double byteTime() const { return 10.0 / baud_; }
+
+  serial_io::ByteStream& stream_;
+  const ekf_slam::sim::PolygonWorld& world_;
+  PoseSource pose_source_;
+  EmulatorOptions options_;
+  std::function<int()> peer_baud_;
+  ScanObserver observer_;
+  std::mt19937 rng_;
+
+  TelegramDecoder decoder_{kHostAddress};
+  int baud_;
+  int pending_baud_ = 0;  // applied once the line is free
+  bool streaming_ = false;
+  bool installation_mode_ = false;
+  bool silent_ = false;
+  int angle_deg_;
+  int resolution_centideg_;
+  std::vector<uint8_t> config_;
+  uint8_t status_byte_ = 0x00;
+
+  std::deque<std::pair<double, uint8_t>> output_;  // (time the byte is complete, byte)
+  double line_free_at_ = 0.0;
+  double next_sweep_start_ = -1.0;  // < 0: none scheduled
+  uint64_t garbage_heard_ = 0;
+};
+
+}  // namespace sick_lms200

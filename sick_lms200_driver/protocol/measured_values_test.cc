@@ -1,0 +1,151 @@
+#include "sick_lms200_driver/protocol/measured_values.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace sick_lms200 {
+namespace {
+
+Telegram measuredValuesTelegram(const std::vector<uint16_t>& raw, Units units, int partial = 0,
+                                uint8_t status = 0) {
+  Telegram telegram;
+  telegram.address = kSensorAddress;
+  telegram.command = cmd::kMeasuredValues;
+  telegram.data = buildMeasuredValuesData(raw, units, partial, status);
+  return telegram;
+}
+
+TEST(MeasuredValues, ParsesMillimetresAndCentimetres) {
+  MeasuredValues values;
+  std::string error;
+  ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram({1234, 0, 8182}, Units::kMillimetres),
+                                  &values, &error))
+      << error;
+  ASSERT_EQ(values.ranges.size(), 3u);
+  EXPECT_FLOAT_EQ(values.ranges[0], 1.234f);
+  EXPECT_FLOAT_EQ(values.ranges[1], 0.0f);
+  EXPECT_FLOAT_EQ(values.ranges[2], 8.182f);
+  EXPECT_EQ(values.units, Units::kMillimetres);
+
+  ASSERT_TRUE(
+      parseMeasuredValues(measuredValuesTelegram({1234, 8182}, Units::kCentimetres), &values, &error));
+  EXPECT_FLOAT_EQ(values.ranges[0], 12.34f);
+  EXPECT_FLOAT_EQ(values.ranges[1], 81.82f);
+  EXPECT_EQ(values.units, Units::kCentimetres);
+  EXPECT_DOUBLE_EQ(maxRange(Units::kCentimetres), 81.82);
+}
+
+TEST(MeasuredValues, MapsEveryReservedCodePerRep117) {
+  const float inf = std::numeric_limits<float>::infinity();
+  for (Units units : {Units::kMillimetres, Units::kCentimetres}) {
+    for (uint16_t code = kFirstReservedCode; code <= 8191; ++code) {
+      const float range = rangeFromRaw(code, units);
+      if (code == kCodeAboveMaximum || code == kCodeLowSignal) {
+        EXPECT_EQ(range, inf) << code;
+      } else {
+        EXPECT_TRUE(std::isnan(range)) << code;  // dazzle, invalid, overflow, undocumented
+      }
+    }
+    EXPECT_TRUE(std::isfinite(rangeFromRaw(kFirstReservedCode - 1, units)));
+  }
+}
+
+TEST(MeasuredValues, SeparatesFlagBitsFromRanges) {
+  MeasuredValues values;
+  std::string error;
+  const uint16_t with_flags = static_cast<uint16_t>(1000 | (0x5 << 13));
+  ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram({with_flags}, Units::kMillimetres),
+                                  &values, &error));
+  EXPECT_EQ(values.raw[0], 1000);
+  EXPECT_EQ(values.flags[0], 0x5);
+  EXPECT_FLOAT_EQ(values.ranges[0], 1.0f);
+}
+
+TEST(MeasuredValues, RoundTripsRangesThroughRawValues) {
+  EXPECT_EQ(rawFromRange(2.5, Units::kMillimetres), 2500);
+  EXPECT_EQ(rawFromRange(2.5, Units::kCentimetres), 250);
+  EXPECT_EQ(rawFromRange(std::numeric_limits<double>::infinity(), Units::kMillimetres),
+            kCodeAboveMaximum);
+  EXPECT_EQ(rawFromRange(9.0, Units::kMillimetres), kCodeAboveMaximum);
+  EXPECT_EQ(rawFromRange(std::nan(""), Units::kMillimetres), kCodeInvalid);
+}
+
+TEST(MeasuredValues, RejectsTruncatedOversizedAndInconsistentTelegrams) {
+  MeasuredValues values;
+  std::string error;
+  Telegram telegram = measuredValuesTelegram({1, 2, 3}, Units::kMillimetres);
+  Telegram truncated = telegram;
+  truncated.data.pop_back();
+  EXPECT_FALSE(parseMeasuredValues(truncated, &values, &error));
+  EXPECT_NE(error.find("needs"), std::string::npos) << error;
+  Telegram oversized = telegram;
+  oversized.data.push_back(0);
+  EXPECT_FALSE(parseMeasuredValues(oversized, &values, &error));
+  Telegram tiny = telegram;
+  tiny.data.resize(2);
+  EXPECT_FALSE(parseMeasuredValues(tiny, &values, &error));
+  Telegram too_many = measuredValuesTelegram(std::vector<uint16_t>(kMaxValueCount), Units::kMillimetres);
+  too_many.data[0] = 0xFF;  // count 1023
+  too_many.data[1] |= 0x03;
+  EXPECT_FALSE(parseMeasuredValues(too_many, &values, &error));
+  EXPECT_NE(error.find("exceeds"), std::string::npos) << error;
+  Telegram bad_units = telegram;
+  bad_units.data[1] |= 0xC0;  // units code 3
+  EXPECT_FALSE(parseMeasuredValues(bad_units, &values, &error));
+  Telegram wrong_command = telegram;
+  wrong_command.command = 0xB1;
+  EXPECT_FALSE(parseMeasuredValues(wrong_command, &values, &error));
+}
+
+TEST(MeasuredValues, ReadsStatusSeverity) {
+  MeasuredValues values;
+  std::string error;
+  ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram({1}, Units::kMillimetres, 0, 0x83),
+                                  &values, &error));
+  EXPECT_EQ(values.status, 0x83);
+  EXPECT_EQ(statusSeverity(values.status), StatusSeverity::kError);
+  EXPECT_NE(describeStatus(values.status).find("contaminated"), std::string::npos);
+  EXPECT_EQ(statusSeverity(0x00), StatusSeverity::kOk);
+}
+
+TEST(InterlaceAssembler, AssemblesHalfDegreeScanFromTwoPartials) {
+  // Beam i of the full 180°/0.5° scan has raw value 1000 + i.
+  InterlaceAssembler assembler(180, 50);
+  ASSERT_EQ(assembler.partialsPerScan(), 2);
+  std::vector<float> full;
+  for (int k = 0; k < 2; ++k) {
+    std::vector<uint16_t> raw;
+    for (int j = 0; j < partialBeamCount(180, 50, k); ++j) raw.push_back(1000 + 2 * j + k);
+    MeasuredValues partial;
+    std::string error;
+    ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram(raw, Units::kMillimetres, k), &partial,
+                                    &error));
+    EXPECT_EQ(assembler.add(partial, &full), k == 1);
+  }
+  ASSERT_EQ(full.size(), 361u);
+  for (int i = 0; i < 361; ++i) EXPECT_FLOAT_EQ(full[i], (1000 + i) * 0.001f) << i;
+}
+
+TEST(InterlaceAssembler, AssemblesQuarterDegreeAndRestartsOnMissingPartial) {
+  InterlaceAssembler assembler(100, 25);
+  ASSERT_EQ(assembler.partialsPerScan(), 4);
+  auto partial = [](int k) {
+    MeasuredValues values;
+    values.partial_index = k;
+    for (int j = 0; j < partialBeamCount(100, 25, k); ++j) values.ranges.push_back(j * 4 + k);
+    return values;
+  };
+  std::vector<float> full;
+  // 0, 1, (2 lost), 3: the incomplete set is dropped, never published.
+  EXPECT_FALSE(assembler.add(partial(0), &full));
+  EXPECT_FALSE(assembler.add(partial(1), &full));
+  EXPECT_FALSE(assembler.add(partial(3), &full));
+  EXPECT_GE(assembler.dropped(), 1u);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(assembler.add(partial(k), &full), k == 3);
+  ASSERT_EQ(full.size(), 401u);
+  for (int i = 0; i < 401; ++i) EXPECT_FLOAT_EQ(full[i], static_cast<float>(i)) << i;
+}
+
+}  // namespace
+}  // namespace sick_lms200

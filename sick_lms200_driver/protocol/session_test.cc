@@ -1,0 +1,208 @@
+// Session and ScannerLink against the emulator on a real pseudo-terminal.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include "serial_io/pseudo_terminal.h"
+#include "serial_io/serial_port.h"
+#include "sick_lms200_driver/emulator/lms200_emulator.h"
+#include "sick_lms200_driver/emulator/room.h"
+#include "sick_lms200_driver/protocol/scanner_link.h"
+#include "sick_lms200_driver/protocol/session.h"
+
+namespace sick_lms200 {
+namespace {
+
+double wallNow() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Runs an emulator on a pty in a background thread.
+class EmulatorFixture {
+ public:
+  explicit EmulatorFixture(EmulatorOptions options, const std::string& link)
+      : world_(makeDemoRoom()) {
+    EXPECT_TRUE(pty_.open(link)) << pty_.error();
+    emulator_ = std::make_unique<Lms200Emulator>(
+        pty_, world_, [](double) { return demoSensorPose(); }, options);
+    emulator_->setPeerBaudSource([this] { return pty_.peerBaud(); });
+    emulator_->setScanObserver([this](const TrueScan& truth) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      truths_.push_back(truth);
+    });
+    thread_ = std::thread([this] {
+      while (running_) {
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          emulator_->spinOnce(wallNow());
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(300));
+      }
+    });
+  }
+  ~EmulatorFixture() {
+    running_ = false;
+    thread_.join();
+  }
+  template <typename F>
+  auto locked(F f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return f(*emulator_, truths_);
+  }
+  std::string device() const { return pty_.devicePath(); }
+
+ private:
+  ekf_slam::sim::PolygonWorld world_;
+  serial_io::PseudoTerminal pty_;
+  std::unique_ptr<Lms200Emulator> emulator_;
+  std::vector<TrueScan> truths_;
+  std::mutex mutex_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
+  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_a");
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600)) << port.error();
+  TelegramDecoder decoder(kSensorAddress);
+  SessionOptions options;
+  options.baud = 38400;
+  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  ASSERT_TRUE(session.initialize()) << session.error();
+  EXPECT_EQ(session.currentBaud(), 38400);
+  EXPECT_EQ(session.typeString().rfind("LMS200", 0), 0u) << session.typeString();
+  EXPECT_EQ(port.baud(), 38400);
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    EXPECT_EQ(e.baud(), 38400);
+    EXPECT_TRUE(e.streaming());
+    return 0;
+  });
+  // Streamed scans decode at the new rate.
+  int scans = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (scans < 3 && std::chrono::steady_clock::now() < deadline) {
+    uint8_t buffer[512];
+    const auto result = port.read(buffer, sizeof(buffer), std::chrono::milliseconds(100));
+    decoder.feed(buffer, result.bytes);
+    DecoderEvent event;
+    while (decoder.next(&event)) {
+      MeasuredValues values;
+      std::string error;
+      if (event.kind == DecoderEvent::Kind::kTelegram &&
+          parseMeasuredValues(event.telegram, &values, &error)) {
+        EXPECT_EQ(values.ranges.size(), 181u);
+        scans++;
+      }
+    }
+  }
+  EXPECT_EQ(scans, 3);
+  EXPECT_TRUE(session.stopStreaming()) << session.error();
+}
+
+TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
+  EmulatorOptions emulator_options;
+  emulator_options.initial_baud = 19200;  // left at another rate by a previous run
+  emulator_options.nak_rate = 0.2;        // and a flaky line: retries needed
+  emulator_options.seed = 3;
+  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_b");
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600));
+  TelegramDecoder decoder(kSensorAddress);
+  SessionOptions options;
+  options.baud = 38400;
+  options.angle_deg = 100;
+  options.resolution_centideg = 25;
+  options.units = Units::kCentimetres;
+  options.attempts = 5;
+  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  ASSERT_TRUE(session.initialize()) << session.error();
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    EXPECT_EQ(e.baud(), 38400);
+    EXPECT_EQ(e.angleDeg(), 100);
+    EXPECT_EQ(e.resolutionCentideg(), 25);
+    EXPECT_EQ(e.units(), Units::kCentimetres);
+    return 0;
+  });
+}
+
+TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
+  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_c");
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    e.setSilent(true);
+    return 0;
+  });
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600));
+  TelegramDecoder decoder(kSensorAddress);
+  SessionOptions options;
+  options.probe_bauds = {9600, 38400};
+  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  EXPECT_FALSE(session.initialize());
+  EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
+}
+
+TEST(Session, RejectsImpossibleOptionsNamingTheField) {
+  SessionOptions options;
+  options.angle_deg = 180;
+  options.resolution_centideg = 25;
+  EXPECT_NE(validateSessionOptions(options).find("resolution"), std::string::npos);
+  options = SessionOptions();
+  options.baud = 57600;
+  EXPECT_NE(validateSessionOptions(options).find("baud"), std::string::npos);
+}
+
+TEST(ScannerLink, StampsFirstBeamAndDropsCorruptedScans) {
+  EmulatorOptions emulator_options;
+  emulator_options.bad_crc_rate = 0.25;
+  emulator_options.seed = 11;
+  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_d");
+  LinkOptions options;
+  options.port = emulator.device();
+  std::vector<LaserScanData> scans;
+  ScannerLink link(options, wallNow, [&](const LaserScanData& scan) { scans.push_back(scan); });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+  while (scans.size() < 30 && std::chrono::steady_clock::now() < deadline) link.spinOnce();
+  link.shutdown();
+  ASSERT_GE(scans.size(), 30u) << link.stats().last_error;
+  const LinkStats stats = link.stats();
+  EXPECT_EQ(stats.baud, 38400);
+  EXPECT_GE(stats.crc_errors, 1u);
+
+  std::vector<TrueScan> truths = emulator.locked([](Lms200Emulator&, auto& t) { return t; });
+  std::vector<double> stamp_errors;
+  int corrupted_published = 0;
+  for (const LaserScanData& scan : scans) {
+    const TrueScan* match = nullptr;
+    for (const TrueScan& truth : truths) {
+      if (std::abs(truth.first_beam_time - scan.first_beam_time) < 0.02) match = &truth;
+    }
+    ASSERT_NE(match, nullptr) << "a published scan matches no emulated scan";
+    if (match->corrupted) corrupted_published++;
+    stamp_errors.push_back(std::abs(match->first_beam_time - scan.first_beam_time));
+    for (size_t i = 0; i < scan.values.ranges.size(); ++i) {
+      if (std::isinf(match->sent[i])) {
+        EXPECT_TRUE(std::isinf(scan.values.ranges[i]));
+      } else {
+        EXPECT_NEAR(scan.values.ranges[i], match->sent[i], 1e-6);
+      }
+    }
+  }
+  EXPECT_EQ(corrupted_published, 0);
+  std::sort(stamp_errors.begin(), stamp_errors.end());
+  const double median = stamp_errors[stamp_errors.size() / 2];
+  const double p90 = stamp_errors[stamp_errors.size() * 9 / 10];
+  RecordProperty("stamp_error_median_us", static_cast<int>(median * 1e6));
+  RecordProperty("stamp_error_p90_us", static_cast<int>(p90 * 1e6));
+  EXPECT_LT(median, 0.002);
+  EXPECT_LT(p90, 0.002);
+}
+
+}  // namespace
+}  // namespace sick_lms200
