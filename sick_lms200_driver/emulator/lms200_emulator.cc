@@ -161,7 +161,8 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       return;
     }
     case cmd::kWriteConfig: {
-      const bool ok = installation_mode_ && data.size() == kConfigSize && data[kConfigUnitsIndex] <= 1;
+      const bool ok =
+          installation_mode_ && data.size() == kConfigSize && data[kConfigUnitsIndex] <= 1;
       if (ok) config_ = data;
       reply(request.command, {static_cast<uint8_t>(ok ? 1 : 0), status_byte_},
             ok ? start + options_.config_write_delay : start);

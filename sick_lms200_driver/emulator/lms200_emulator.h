@@ -33,23 +33,23 @@ struct EmulatorOptions {
   Units units = Units::kMillimetres;  // power-on units
   double range_noise_sigma = 0.01;    // m, Gaussian, on ranges that hit something
   std::string type_string = "LMS200;30106;V02.10 ;S01.31 ";
-  double config_write_delay = 0.5;    // s before the 0x77 reply (EEPROM write)
+  double config_write_delay = 0.5;  // s before the 0x77 reply (EEPROM write)
   // Fault injection, probabilities in [0, 1].
-  double bad_crc_rate = 0.0;          // per streamed scan: checksum corrupted
-  double drop_byte_rate = 0.0;        // per streamed scan: one byte lost
-  double nak_rate = 0.0;              // per request: answered with NAK only
+  double bad_crc_rate = 0.0;    // per streamed scan: checksum corrupted
+  double drop_byte_rate = 0.0;  // per streamed scan: one byte lost
+  double nak_rate = 0.0;        // per request: answered with NAK only
   uint32_t seed = 1;
 };
 
 // Ground truth of one streamed scan.
 struct TrueScan {
-  double first_beam_time = 0.0;   // s, emulator clock
+  double first_beam_time = 0.0;  // s, emulator clock
   int angle_deg = 180;
   int resolution_centideg = 100;
-  std::vector<double> ranges;     // m, noise-free, +inf for no return, angular order
-  std::vector<double> sent;       // m, as encoded (noise, units, reserved codes)
-  int baud = 0;                   // line speed it is sent at
-  bool corrupted = false;         // bad checksum or dropped byte injected
+  std::vector<double> ranges;  // m, noise-free, +inf for no return, angular order
+  std::vector<double> sent;    // m, as encoded (noise, units, reserved codes)
+  int baud = 0;                // line speed it is sent at
+  bool corrupted = false;      // bad checksum or dropped byte injected
 };
 
 class Lms200Emulator {

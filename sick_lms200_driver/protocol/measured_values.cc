@@ -87,8 +87,8 @@ std::vector<uint8_t> buildMeasuredValuesData(const std::vector<uint16_t>& raw, U
                                              int partial_index, uint8_t status) {
   std::vector<uint8_t> data;
   data.reserve(3 + 2 * raw.size());
-  const uint16_t info = static_cast<uint16_t>((raw.size() & 0x03FF) | ((partial_index & 0x03) << 11) |
-                                              (static_cast<int>(units) << 14));
+  const uint16_t info = static_cast<uint16_t>(
+      (raw.size() & 0x03FF) | ((partial_index & 0x03) << 11) | (static_cast<int>(units) << 14));
   data.push_back(static_cast<uint8_t>(info & 0xFF));
   data.push_back(static_cast<uint8_t>(info >> 8));
   for (uint16_t value : raw) {

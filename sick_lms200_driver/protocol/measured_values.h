@@ -50,11 +50,11 @@ constexpr uint8_t kStatusContaminationBit = 0x80;  // optics dirty (warning)
 std::string describeStatus(uint8_t status);
 
 struct MeasuredValues {
-  int partial_index = 0;            // 0 for full scans
+  int partial_index = 0;  // 0 for full scans
   Units units = Units::kMillimetres;
-  std::vector<uint16_t> raw;        // 13-bit ranges in wire order
-  std::vector<uint8_t> flags;       // bits 13-15 of each word, shifted to 0-2
-  std::vector<float> ranges;        // metres, REP-117 for reserved codes
+  std::vector<uint16_t> raw;   // 13-bit ranges in wire order
+  std::vector<uint8_t> flags;  // bits 13-15 of each word, shifted to 0-2
+  std::vector<float> ranges;   // metres, REP-117 for reserved codes
   uint8_t status = 0;
 };
 

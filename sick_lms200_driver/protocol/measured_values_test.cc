@@ -28,8 +28,8 @@ TEST(MeasuredValues, ParsesMillimetresAndCentimetres) {
   EXPECT_FLOAT_EQ(values.ranges[2], 8.182f);
   EXPECT_EQ(values.units, Units::kMillimetres);
 
-  ASSERT_TRUE(
-      parseMeasuredValues(measuredValuesTelegram({1234, 8182}, Units::kCentimetres), &values, &error));
+  ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram({1234, 8182}, Units::kCentimetres),
+                                  &values, &error));
   EXPECT_FLOAT_EQ(values.ranges[0], 12.34f);
   EXPECT_FLOAT_EQ(values.ranges[1], 81.82f);
   EXPECT_EQ(values.units, Units::kCentimetres);
@@ -85,7 +85,8 @@ TEST(MeasuredValues, RejectsTruncatedOversizedAndInconsistentTelegrams) {
   Telegram tiny = telegram;
   tiny.data.resize(2);
   EXPECT_FALSE(parseMeasuredValues(tiny, &values, &error));
-  Telegram too_many = measuredValuesTelegram(std::vector<uint16_t>(kMaxValueCount), Units::kMillimetres);
+  Telegram too_many =
+      measuredValuesTelegram(std::vector<uint16_t>(kMaxValueCount), Units::kMillimetres);
   too_many.data[0] = 0xFF;  // count 1023
   too_many.data[1] |= 0x03;
   EXPECT_FALSE(parseMeasuredValues(too_many, &values, &error));
@@ -119,8 +120,8 @@ TEST(InterlaceAssembler, AssemblesHalfDegreeScanFromTwoPartials) {
     for (int j = 0; j < partialBeamCount(180, 50, k); ++j) raw.push_back(1000 + 2 * j + k);
     MeasuredValues partial;
     std::string error;
-    ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram(raw, Units::kMillimetres, k), &partial,
-                                    &error));
+    ASSERT_TRUE(
+        parseMeasuredValues(measuredValuesTelegram(raw, Units::kMillimetres, k), &partial, &error));
     EXPECT_EQ(assembler.add(partial, &full), k == 1);
   }
   ASSERT_EQ(full.size(), 361u);

@@ -146,8 +146,7 @@ void ScannerLink::stream() {
     }
   }
   syncDecoderStats();
-  const double silent_for =
-      std::chrono::duration<double>(Clock::now() - last_scan_).count();
+  const double silent_for = std::chrono::duration<double>(Clock::now() - last_scan_).count();
   const double period =
       1.0 / expectedScanRate(options_.session.angle_deg, options_.session.resolution_centideg,
                              session_->currentBaud());
@@ -198,8 +197,8 @@ void ScannerLink::handleTelegram(const DecoderEvent& event, double read_time, ui
   const size_t telegram_bytes = event.telegram.data.size() + 1 + kTelegramOverhead;
   scan.sweep_time = sweepTime(angle, res);
   scan.time_increment = beamTimeIncrement(res);
-  scan.first_beam_time = last_byte_time - telegram_bytes * byte_time - scan.sweep_time +
-                         options_.time_offset;
+  scan.first_beam_time =
+      last_byte_time - telegram_bytes * byte_time - scan.sweep_time + options_.time_offset;
   scan.angle_deg = angle;
   scan.resolution_centideg = res;
   last_scan_ = Clock::now();

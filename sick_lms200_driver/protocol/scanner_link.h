@@ -35,9 +35,9 @@ double expectedScanRate(int angle_deg, int resolution_centideg, int baud);
 struct LinkOptions {
   std::string port = "/dev/ttyUSB0";
   SessionOptions session;
-  double time_offset = 0.0;       // s, added to every estimated first-beam time
-  double reconnect_delay = 1.0;   // s between failed connection attempts
-  double data_timeout = 1.0;      // s without a valid scan before re-initialising
+  double time_offset = 0.0;      // s, added to every estimated first-beam time
+  double reconnect_delay = 1.0;  // s between failed connection attempts
+  double data_timeout = 1.0;     // s without a valid scan before re-initialising
 };
 
 struct LaserScanData {
@@ -46,7 +46,7 @@ struct LaserScanData {
   double time_increment = 0.0;   // s between beams within a mirror turn
   int angle_deg = 180;
   int resolution_centideg = 100;
-  MeasuredValues values;         // ranges in metres (REP-117) and raw words
+  MeasuredValues values;  // ranges in metres (REP-117) and raw words
 };
 
 enum class LinkState { kDisconnected, kInitialising, kStreaming };
@@ -58,14 +58,14 @@ struct LinkStats {
   std::string type_string;
   uint8_t sensor_status = 0;
   bool have_status = false;
-  uint64_t scans = 0;               // scans handed to the callback
-  uint64_t crc_errors = 0;          // failed checksums (telegram dropped)
-  uint64_t bad_frames = 0;          // impossible header (resynchronised)
+  uint64_t scans = 0;       // scans handed to the callback
+  uint64_t crc_errors = 0;  // failed checksums (telegram dropped)
+  uint64_t bad_frames = 0;  // impossible header (resynchronised)
   uint64_t discarded_bytes = 0;
-  uint64_t malformed_scans = 0;     // valid checksum but inconsistent content
-  uint64_t status_rejected = 0;     // scans dropped for a sensor error status
-  uint64_t connects = 0;            // successful initialisations
-  uint64_t link_losses = 0;         // unplugs, device errors, silences
+  uint64_t malformed_scans = 0;  // valid checksum but inconsistent content
+  uint64_t status_rejected = 0;  // scans dropped for a sensor error status
+  uint64_t connects = 0;         // successful initialisations
+  uint64_t link_losses = 0;      // unplugs, device errors, silences
   std::string last_error;
 };
 

@@ -135,8 +135,7 @@ bool Session::probeBaud() {
       current_baud_ = baud;
       decoder_.reset();
       Telegram reply;
-      if (transact(cmd::kModeChange, {mode::kRequestOnly}, &reply, waitFor(milliseconds(150)),
-                   1)) {
+      if (transact(cmd::kModeChange, {mode::kRequestOnly}, &reply, waitFor(milliseconds(150)), 1)) {
         return true;
       }
       if (error_.find("closed") != std::string::npos) return false;
@@ -207,12 +206,11 @@ bool Session::initialize() {
   if (!switchBaud(options_.baud)) return false;
 
   Telegram reply;
-  if (!transact(cmd::kTypeString, {}, &reply, waitFor(options_.reply_timeout),
-                options_.attempts)) {
+  if (!transact(cmd::kTypeString, {}, &reply, waitFor(options_.reply_timeout), options_.attempts)) {
     return fail("reading type string: " + error_);
   }
-  type_string_.assign(reply.data.begin(), reply.data.empty() ? reply.data.end()
-                                                             : reply.data.end() - 1);
+  type_string_.assign(reply.data.begin(),
+                      reply.data.empty() ? reply.data.end() : reply.data.end() - 1);
   if (!transact(cmd::kStatus, {}, &reply, waitFor(options_.reply_timeout), options_.attempts)) {
     return fail("reading status: " + error_);
   }

@@ -23,13 +23,13 @@ constexpr size_t kConfigSize = 34;
 constexpr char kInstallationPassword[] = "SICK_LMS";
 
 struct SessionOptions {
-  int baud = 38400;                   // line speed to switch to: 9600/19200/38400/500000
-  int angle_deg = 180;                // scan angle: 100 or 180
-  int resolution_centideg = 100;      // 100 (1°), 50 (0.5°), 25 (0.25°, 100° only)
-  Units units = Units::kMillimetres;  // mm: 8.18 m max, cm: 81.8 m max
-  std::chrono::milliseconds reply_timeout{400};      // per attempt, on top of line time
-  std::chrono::milliseconds config_timeout{5000};    // writing the configuration is slow
-  int attempts = 3;                                  // per request
+  int baud = 38400;                              // line speed to switch to: 9600/19200/38400/500000
+  int angle_deg = 180;                           // scan angle: 100 or 180
+  int resolution_centideg = 100;                 // 100 (1°), 50 (0.5°), 25 (0.25°, 100° only)
+  Units units = Units::kMillimetres;             // mm: 8.18 m max, cm: 81.8 m max
+  std::chrono::milliseconds reply_timeout{400};  // per attempt, on top of line time
+  std::chrono::milliseconds config_timeout{5000};  // writing the configuration is slow
+  int attempts = 3;                                // per request
   std::vector<int> probe_bauds{9600, 38400, 19200, 500000};
 };
 

@@ -19,8 +19,7 @@ namespace sick_lms200 {
 namespace {
 
 double wallNow() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 // Runs an emulator on a pty in a background thread.
@@ -32,10 +31,8 @@ class EmulatorFixture {
     emulator_ = std::make_unique<Lms200Emulator>(
         pty_, world_, [](double) { return demoSensorPose(); }, options);
     emulator_->setPeerBaudSource([this] { return pty_.peerBaud(); });
-    emulator_->setScanObserver([this](const TrueScan& truth) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      truths_.push_back(truth);
-    });
+    // Called inside spinOnce, which the thread below runs under mutex_.
+    emulator_->setScanObserver([this](const TrueScan& truth) { truths_.push_back(truth); });
     thread_ = std::thread([this] {
       while (running_) {
         {
@@ -74,7 +71,8 @@ TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
   TelegramDecoder decoder(kSensorAddress);
   SessionOptions options;
   options.baud = 38400;
-  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  Session session(
+      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
   ASSERT_TRUE(session.initialize()) << session.error();
   EXPECT_EQ(session.currentBaud(), 38400);
   EXPECT_EQ(session.typeString().rfind("LMS200", 0), 0u) << session.typeString();
@@ -121,7 +119,8 @@ TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
   options.resolution_centideg = 25;
   options.units = Units::kCentimetres;
   options.attempts = 5;
-  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  Session session(
+      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
   ASSERT_TRUE(session.initialize()) << session.error();
   emulator.locked([](Lms200Emulator& e, auto&) {
     EXPECT_EQ(e.baud(), 38400);
@@ -143,7 +142,8 @@ TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
   TelegramDecoder decoder(kSensorAddress);
   SessionOptions options;
   options.probe_bauds = {9600, 38400};
-  Session session(port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  Session session(
+      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
   EXPECT_FALSE(session.initialize());
   EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
 }

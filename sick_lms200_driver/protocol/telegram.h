@@ -77,9 +77,9 @@ struct DecoderEvent {
 
 struct DecoderStats {
   uint64_t telegrams = 0;
-  uint64_t crc_errors = 0;         // well-framed telegrams whose checksum failed
-  uint64_t bad_frames = 0;         // STX with an impossible address or length
-  uint64_t discarded_bytes = 0;    // bytes skipped while resynchronising
+  uint64_t crc_errors = 0;       // well-framed telegrams whose checksum failed
+  uint64_t bad_frames = 0;       // STX with an impossible address or length
+  uint64_t discarded_bytes = 0;  // bytes skipped while resynchronising
   uint64_t acks = 0;
   uint64_t naks = 0;
 };
@@ -107,9 +107,9 @@ class TelegramDecoder {
 
   uint8_t expected_address_;
   std::vector<uint8_t> buffer_;
-  size_t start_ = 0;           // first unconsumed byte in buffer_
-  uint64_t bytes_fed_ = 0;     // total bytes ever fed
-  uint64_t consumed_ = 0;      // stream position of buffer_[start_]
+  size_t start_ = 0;        // first unconsumed byte in buffer_
+  uint64_t bytes_fed_ = 0;  // total bytes ever fed
+  uint64_t consumed_ = 0;   // stream position of buffer_[start_]
   std::deque<DecoderEvent> events_;
   DecoderStats stats_;
 };
