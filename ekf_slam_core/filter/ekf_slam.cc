@@ -204,9 +204,21 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
 }
 
 void EkfSlam::mirrorLowerToUpper() {
+  // Copy the lower triangle onto the upper one in cache-sized tiles: a plain
+  // row-by-row copy reads the column-major matrix with a stride of the whole
+  // capacity and costs more than the update itself on large maps.
+  constexpr int kTile = 32;
   const int n = dim_;
-  for (int c = 1; c < n; ++c) {
-    P_.col(c).head(c) = P_.row(c).head(c).transpose();
+  for (int c0 = 0; c0 < n; c0 += kTile) {
+    const int cw = std::min(kTile, n - c0);
+    for (int r0 = 0; r0 < c0; r0 += kTile) {
+      const int rw = std::min(kTile, c0 - r0);
+      // Upper tile (rows r0.., cols c0..) from the lower tile (rows c0.., cols r0..).
+      P_.block(r0, c0, rw, cw) = P_.block(c0, r0, cw, rw).transpose();
+    }
+    for (int c = c0 + 1; c < c0 + cw; ++c) {  // diagonal tile
+      for (int r = c0; r < c; ++r) P_(r, c) = P_(c, r);
+    }
   }
 }
 
