@@ -103,6 +103,7 @@ FilterStatus EkfSlam::predict(const OdometryControl& u, double dt) {
     P_.block(0, kPoseDim, 3, m) = P_rm;
     P_.block(kPoseDim, 0, m, 3) = P_rm.transpose();
   }
+  last_F_ = F;
   ++step_;
   return FilterStatus::kOk;
 }

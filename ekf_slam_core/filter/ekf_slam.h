@@ -107,6 +107,8 @@ class EkfSlam {
   Eigen::Ref<const Eigen::VectorXd> state() const { return x_.head(dim_); }
   Eigen::Ref<const Eigen::MatrixXd> covariance() const { return P_.topLeftCorner(dim_, dim_); }
   long step() const { return step_; }
+  // F of the last accepted prediction (for the smoother's record).
+  const Matrix3& lastMotionJacobian() const { return last_F_; }
   const FilterOptions& options() const { return options_; }
 
   // Normalised estimation error squared of the pose against ground truth.
@@ -127,6 +129,7 @@ class EkfSlam {
   std::unordered_map<int, int> slot_of_id_;
   int next_id_ = 0;
   long step_ = 0;
+  Matrix3 last_F_ = Matrix3::Identity();
 };
 
 }  // namespace ekf_slam
