@@ -1,0 +1,72 @@
+// Log-odds occupancy grid built by ray casting laser scans from known poses:
+// the complete metric map of thesis §3.4.5, re-projected along the smoothed
+// trajectory. Saved as map_server PGM + YAML; converted to
+// nav_msgs/OccupancyGrid values by the ROS adapter.
+//
+// Frame: the map frame; cell (ix, iy) covers [origin + i·resolution,
+// origin + (i+1)·resolution) in x and y. The grid grows as scans reach
+// beyond it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/sensors/scan.h"
+
+namespace ekf_slam {
+
+struct OccupancyGridOptions {
+  double resolution = 0.05;           // m per cell
+  double hit_probability = 0.7;       // P(occupied | beam ended here)
+  double miss_probability = 0.4;      // P(occupied | beam passed through)
+  double clamp_log_odds = 5.0;        // |log-odds| bound, keeps the map revisable
+  double max_insert_range = 30.0;     // m: longer readings are not inserted
+  double no_return_free_range = 0.0;  // m: clear this far along no-return beams (0: do not)
+  double grow_margin = 10.0;          // m added on each side when the grid grows
+
+  std::string validate() const;
+};
+
+class OccupancyGrid {
+ public:
+  explicit OccupancyGrid(const OccupancyGridOptions& options = {});
+
+  // Inserts one scan taken with the laser at `laser_pose` (map frame).
+  void insertScan(const Pose2& laser_pose, const Scan& scan);
+
+  // Probability of occupancy of the cell containing (x, y); 0.5 when unknown
+  // or outside.
+  double probability(double x, double y) const;
+  bool isKnown(double x, double y) const;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  double resolution() const { return options_.resolution; }
+  Vector2 origin() const { return origin_; }  // map-frame corner of cell (0, 0)
+
+  // nav_msgs/OccupancyGrid data: row-major from cell (0, 0), −1 unknown,
+  // else 0..100.
+  std::vector<int8_t> occupancyValues() const;
+
+  // map_server files: `<base>.pgm` and `<base>.yaml` (image referenced by its
+  // file name). Returns an empty string on success, else the error.
+  std::string save(const std::string& base_path) const;
+
+ private:
+  bool cellOf(double x, double y, int* ix, int* iy) const;
+  void ensureContains(const Vector2& a, const Vector2& b);
+  void traceRay(int x0, int y0, int x1, int y1, bool mark_end);
+  float& at(int ix, int iy) { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
+  float at(int ix, int iy) const { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
+
+  OccupancyGridOptions options_;
+  float log_hit_ = 0.0f, log_miss_ = 0.0f;
+  Vector2 origin_ = Vector2::Zero();
+  int width_ = 0, height_ = 0;
+  std::vector<float> log_odds_;  // 0 = unknown
+  std::vector<uint8_t> touched_;
+};
+
+}  // namespace ekf_slam

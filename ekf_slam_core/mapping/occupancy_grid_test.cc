@@ -1,0 +1,137 @@
+#include "ekf_slam_core/mapping/occupancy_grid.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "ekf_slam_core/sim/polygon_world.h"
+
+namespace ekf_slam {
+namespace {
+
+Scan scanFrom(const sim::PolygonWorld& world, const Pose2& laser) {
+  sim::SweepGeometry sweep;
+  sweep.count = 361;
+  sweep.angle_increment = kPi / 360;
+  sweep.max_range = 8.0;
+  Scan scan;
+  scan.ranges = sim::simulateRanges(world, laser, sweep);
+  scan.angle_min = sweep.angle_min;
+  scan.angle_increment = sweep.angle_increment;
+  scan.range_min = 0.05;
+  scan.range_max = 8.0;
+  return scan;
+}
+
+// Largest occupancy within one cell of (x, y): a wall lying exactly on a
+// cell boundary may be recorded in the cell on either side.
+double nearWall(const OccupancyGrid& grid, double x, double y) {
+  const double r = grid.resolution();
+  double best = 0.0;
+  for (double dx : {-r, 0.0, r}) {
+    for (double dy : {-r, 0.0, r}) best = std::max(best, grid.probability(x + dx, y + dy));
+  }
+  return best;
+}
+
+class RoomGrid : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    room_.addPolygon({{0, 0}, {5, 0}, {5, 3.5}, {0, 3.5}});
+    for (const Pose2& pose : {Pose2(1, 1, 0), Pose2(4, 2.5, kPi), Pose2(2.5, 1.7, kPi / 2),
+                              Pose2(2.5, 1.7, -kPi / 2)}) {
+      grid_.insertScan(pose, scanFrom(room_, pose));
+    }
+  }
+  sim::PolygonWorld room_;
+  OccupancyGrid grid_;
+};
+
+TEST_F(RoomGrid, WallsAreOccupiedInsideIsFreeOutsideUnknown) {
+  for (const Vector2& wall :
+       {Vector2(2.5, 0.0), Vector2(5.0, 1.7), Vector2(2.5, 3.5), Vector2(0.0, 1.7)}) {
+    EXPECT_GT(nearWall(grid_, wall.x(), wall.y()), 0.65) << wall.transpose();
+  }
+  for (const Vector2& inside : {Vector2(2.5, 1.7), Vector2(1.0, 2.5), Vector2(4.0, 1.0)}) {
+    EXPECT_LT(grid_.probability(inside.x(), inside.y()), 0.2) << inside.transpose();
+    EXPECT_TRUE(grid_.isKnown(inside.x(), inside.y()));
+  }
+  EXPECT_FALSE(grid_.isKnown(7.0, 7.0));
+  EXPECT_DOUBLE_EQ(grid_.probability(7.0, 7.0), 0.5);
+}
+
+TEST_F(RoomGrid, SavesMapServerFiles) {
+  const std::string base = "/tmp/occupancy_grid_test_" + std::to_string(::getpid());
+  ASSERT_EQ(grid_.save(base), "");
+  std::ifstream pgm(base + ".pgm", std::ios::binary);
+  std::string magic, comment;
+  int w = 0, h = 0, maxval = 0;
+  pgm >> magic;
+  pgm.ignore(1);
+  std::getline(pgm, comment);
+  pgm >> w >> h >> maxval;
+  pgm.ignore(1);
+  EXPECT_EQ(magic, "P5");
+  EXPECT_EQ(w, grid_.width());
+  EXPECT_EQ(h, grid_.height());
+  EXPECT_EQ(maxval, 255);
+  std::vector<char> pixels(static_cast<size_t>(w) * h);
+  pgm.read(pixels.data(), pixels.size());
+  EXPECT_EQ(pgm.gcount(), static_cast<std::streamsize>(pixels.size()));
+  // The room's centre pixel (image rows run from the top) is free (white).
+  const int ix = static_cast<int>((2.5 - grid_.origin().x()) / grid_.resolution());
+  const int iy = static_cast<int>((1.7 - grid_.origin().y()) / grid_.resolution());
+  EXPECT_GT(static_cast<uint8_t>(pixels[static_cast<size_t>(h - 1 - iy) * w + ix]), 200);
+
+  std::ifstream yaml(base + ".yaml");
+  std::stringstream text;
+  text << yaml.rdbuf();
+  EXPECT_NE(text.str().find("image: occupancy_grid_test_"), std::string::npos);
+  EXPECT_NE(text.str().find("resolution: 0.05"), std::string::npos);
+  EXPECT_NE(text.str().find("origin: ["), std::string::npos);
+  ::unlink((base + ".pgm").c_str());
+  ::unlink((base + ".yaml").c_str());
+  EXPECT_NE(grid_.save("/nonexistent/dir/map"), "");
+}
+
+TEST(OccupancyGrid, NoReturnBeamsAndBadValuesNeverMarkHits) {
+  Scan scan;
+  scan.angle_min = -0.1;
+  scan.angle_increment = 0.1;
+  scan.range_min = 0.1;
+  scan.range_max = 80.0;
+  scan.ranges = {81.83, std::numeric_limits<double>::infinity(), std::nan("")};
+  OccupancyGrid grid;
+  grid.insertScan(Pose2(), scan);
+  EXPECT_EQ(grid.width(), 0) << "nothing inserted by default";
+  OccupancyGridOptions clear;
+  clear.no_return_free_range = 3.0;
+  OccupancyGrid cleared(clear);
+  cleared.insertScan(Pose2(), scan);
+  EXPECT_LT(cleared.probability(2.0, 0.0), 0.5);
+  EXPECT_FALSE(cleared.isKnown(3.5, 0.0));
+  for (int8_t v : cleared.occupancyValues()) EXPECT_LE(v, 50);
+}
+
+TEST(OccupancyGrid, GrowingKeepsEarlierCells) {
+  sim::PolygonWorld wall;
+  wall.addSegment({3, -5}, {3, 5});
+  OccupancyGrid grid;
+  grid.insertScan(Pose2(), scanFrom(wall, Pose2()));
+  const double before = grid.probability(2.99, 0.0);
+  EXPECT_GT(nearWall(grid, 3.0, 0.0), 0.65);
+  sim::PolygonWorld far;
+  far.addSegment({-30, -5}, {-30, 5});
+  grid.insertScan(Pose2(-25, 0, kPi), scanFrom(far, Pose2(-25, 0, kPi)));
+  EXPECT_DOUBLE_EQ(grid.probability(2.99, 0.0), before);
+  EXPECT_GT(nearWall(grid, -30.0, 0.0), 0.65);
+  EXPECT_EQ(OccupancyGridOptions().validate(), "");
+  OccupancyGridOptions bad;
+  bad.hit_probability = 0.3;
+  EXPECT_NE(bad.validate().find("hit_probability"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam
