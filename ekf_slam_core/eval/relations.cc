@@ -1,0 +1,128 @@
+#include "ekf_slam_core/eval/relations.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace ekf_slam {
+namespace {
+
+ErrorStats stats(const std::vector<double>& values) {
+  ErrorStats s;
+  if (values.empty()) return s;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  s.mean = sum / values.size();
+  double sq = 0.0;
+  for (double v : values) sq += (v - s.mean) * (v - s.mean);
+  s.stddev = values.size() > 1 ? std::sqrt(sq / (values.size() - 1)) : 0.0;
+  return s;
+}
+
+bool isContentLine(const std::string& line) {
+  const size_t first = line.find_first_not_of(" \t\r");
+  return first != std::string::npos && line[first] != '#';
+}
+
+}  // namespace
+
+std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out) {
+  std::ifstream in(path);
+  if (!in) return path + ": cannot open";
+  out->clear();
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!isContentLine(line)) continue;
+    std::istringstream fields(line);
+    StampedPose p;
+    double x, y, theta;
+    std::string extra;
+    if (!(fields >> p.stamp >> x >> y >> theta) || (fields >> extra)) {
+      return path + ":" + std::to_string(number) + ": expected 'stamp x y theta'";
+    }
+    if (!std::isfinite(p.stamp) || !std::isfinite(x) || !std::isfinite(y) ||
+        !std::isfinite(theta)) {
+      return path + ":" + std::to_string(number) + ": non-finite value";
+    }
+    p.pose = Pose2(x, y, theta);
+    out->push_back(p);
+  }
+  return "";
+}
+
+std::string writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+  FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) return path + ": cannot write";
+  for (const StampedPose& p : poses) {
+    std::fprintf(f, "%.6f %.6f %.6f %.6f\n", p.stamp, p.pose.x, p.pose.y, p.pose.theta);
+  }
+  return std::fclose(f) == 0 ? "" : path + ": write error";
+}
+
+std::string readRelations(const std::string& path, std::vector<Relation>* out) {
+  std::ifstream in(path);
+  if (!in) return path + ": cannot open";
+  out->clear();
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!isContentLine(line)) continue;
+    std::istringstream fields(line);
+    Relation r;
+    double x, y, z, roll, pitch, yaw;
+    if (!(fields >> r.t1 >> r.t2 >> x >> y >> z >> roll >> pitch >> yaw)) {
+      return path + ":" + std::to_string(number) + ": expected 't1 t2 x y z roll pitch yaw'";
+    }
+    r.motion = Pose2(x, y, yaw);
+    out->push_back(r);
+  }
+  return "";
+}
+
+RelationErrors evaluateRelations(const std::vector<Relation>& relations,
+                                 const std::vector<StampedPose>& trajectory,
+                                 double stamp_tolerance) {
+  // Sorted copy for lookup (the trajectory itself may not be monotonic).
+  std::vector<StampedPose> sorted = trajectory;
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  auto find = [&](double t, Pose2* pose) {
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), t,
+                                     [](const StampedPose& p, double v) { return p.stamp < v; });
+    double best = stamp_tolerance;
+    bool found = false;
+    for (auto c : {it, it == sorted.begin() ? it : it - 1}) {
+      if (c == sorted.end()) continue;
+      const double d = std::abs(c->stamp - t);
+      if (d <= best) {
+        best = d;
+        *pose = c->pose;
+        found = true;
+      }
+    }
+    return found;
+  };
+
+  RelationErrors out;
+  out.relations = static_cast<int>(relations.size());
+  std::vector<double> t_sq, r_sq;
+  for (const Relation& r : relations) {
+    Pose2 a, b;
+    if (!find(r.t1, &a) || !find(r.t2, &b)) continue;
+    const Pose2 e = compose(inverse(r.motion), between(a, b));
+    const double te = std::hypot(e.x, e.y), re = std::abs(wrapAngle(e.theta));
+    out.translation_errors.push_back(te);
+    out.rotation_errors.push_back(re);
+    t_sq.push_back(te * te);
+    r_sq.push_back(re * re);
+  }
+  out.used = static_cast<int>(out.translation_errors.size());
+  out.translation = stats(out.translation_errors);
+  out.rotation = stats(out.rotation_errors);
+  out.translation_squared = stats(t_sq);
+  out.rotation_squared = stats(r_sq);
+  return out;
+}
+
+}  // namespace ekf_slam

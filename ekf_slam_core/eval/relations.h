@@ -1,0 +1,57 @@
+// The relation-based accuracy metric of Kümmerle et al. 2009 ("On measuring
+// the accuracy of SLAM algorithms"), as described in
+// ../shared/datasets/README.md, and the trajectory/relations file formats.
+//
+// A relation (t1, t2, δ) is the ground-truth motion from the pose at scan
+// time t1 to the pose at t2, in the frame of the first. For an estimated
+// trajectory the error is e = δ⁻¹ ⊕ (x(t1)⁻¹ ⊕ x(t2)); the translational
+// error is |e_t| (m), the rotational error |e_θ| (rad).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/geometry/pose2.h"
+
+namespace ekf_slam {
+
+struct StampedPose {
+  double stamp = 0.0;  // s
+  Pose2 pose;
+};
+
+struct Relation {
+  double t1 = 0.0, t2 = 0.0;  // s
+  Pose2 motion;               // x(t1)⁻¹ ⊕ x(t2), ground truth
+};
+
+// Reads "stamp x y theta" lines (# comments and blank lines skipped).
+// Returns an empty string on success, else "<path>:<line>: <problem>".
+std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out);
+std::string writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+// Reads "t1 t2 x y z roll pitch yaw" lines.
+std::string readRelations(const std::string& path, std::vector<Relation>* out);
+
+struct ErrorStats {
+  double mean = 0.0, stddev = 0.0;
+};
+
+struct RelationErrors {
+  int relations = 0;                       // in the file
+  int used = 0;                            // both poses found
+  ErrorStats translation;                  // m
+  ErrorStats rotation;                     // rad
+  ErrorStats translation_squared;          // m²
+  ErrorStats rotation_squared;             // rad²
+  std::vector<double> translation_errors;  // per used relation
+  std::vector<double> rotation_errors;
+};
+
+// Poses are looked up by stamp within `stamp_tolerance` seconds (the nearest
+// one). Relations whose poses are missing are not used (see `used`).
+RelationErrors evaluateRelations(const std::vector<Relation>& relations,
+                                 const std::vector<StampedPose>& trajectory,
+                                 double stamp_tolerance = 1e-4);
+
+}  // namespace ekf_slam
