@@ -18,10 +18,9 @@ double sweepTime(int angle_deg, int resolution_centideg) {
   return (turns - 1) * kMirrorPeriod + kMirrorPeriod * angle_deg / 360.0;
 }
 
-double beamTimeIncrement(int resolution_centideg) {
-  // Within one turn, neighbouring beams of the same partial scan are 1° apart.
-  (void)resolution_centideg;
-  return kMirrorPeriod / 360.0;
+double beamTimeIncrement(int angle_deg, int resolution_centideg) {
+  const int count = angle_deg * 100 / resolution_centideg + 1;
+  return sweepTime(angle_deg, resolution_centideg) / (count - 1);
 }
 
 size_t scanTelegramBytes(int angle_deg, int resolution_centideg) {
@@ -120,6 +119,7 @@ void ScannerLink::connect() {
     return;
   }
   last_scan_ = Clock::now();
+  stamp_filter_.reset();
   std::lock_guard<std::mutex> lock(mutex_);
   stats_.state = LinkState::kStreaming;
   stats_.baud = session_->currentBaud();
@@ -196,9 +196,10 @@ void ScannerLink::handleTelegram(const DecoderEvent& event, double read_time, ui
       read_time - static_cast<double>(bytes_fed - event.end_position) * byte_time;
   const size_t telegram_bytes = event.telegram.data.size() + 1 + kTelegramOverhead;
   scan.sweep_time = sweepTime(angle, res);
-  scan.time_increment = beamTimeIncrement(res);
+  scan.time_increment = beamTimeIncrement(angle, res);
+  const double raw_stamp = last_byte_time - telegram_bytes * byte_time - scan.sweep_time;
   scan.first_beam_time =
-      last_byte_time - telegram_bytes * byte_time - scan.sweep_time + options_.time_offset;
+      (options_.filter_stamps ? stamp_filter_.filter(raw_stamp) : raw_stamp) + options_.time_offset;
   scan.angle_deg = angle;
   scan.resolution_centideg = res;
   last_scan_ = Clock::now();

@@ -16,6 +16,7 @@
 #include "serial_io/serial_port.h"
 #include "sick_lms200_driver/protocol/measured_values.h"
 #include "sick_lms200_driver/protocol/session.h"
+#include "sick_lms200_driver/protocol/stamp_filter.h"
 #include "sick_lms200_driver/protocol/telegram.h"
 
 namespace sick_lms200 {
@@ -25,8 +26,11 @@ constexpr double kMirrorPeriod = 1.0 / 75.0;  // s per mirror turn (75 Hz)
 // Time (s) from the first to the last beam of a full scan in mode 0x24: an
 // interlaced scan (0.5°/0.25°) spans extra mirror turns.
 double sweepTime(int angle_deg, int resolution_centideg);
-// Seconds between beams within one mirror turn (LaserScan::time_increment).
-double beamTimeIncrement(int resolution_centideg);
+// LaserScan::time_increment (s): sweepTime / (count - 1), so that the stamp
+// plus (count - 1) increments is the time of the last beam. Exact for 1°
+// scans; for interlaced scans neighbouring beams come from different mirror
+// turns and this is the average spacing.
+double beamTimeIncrement(int angle_deg, int resolution_centideg);
 // Bytes of one full-scan measured-values telegram (with STX..CRC).
 size_t scanTelegramBytes(int angle_deg, int resolution_centideg);
 // Scans per second the sensor can deliver at `baud` (link- or mirror-bound).
@@ -38,12 +42,13 @@ struct LinkOptions {
   double time_offset = 0.0;      // s, added to every estimated first-beam time
   double reconnect_delay = 1.0;  // s between failed connection attempts
   double data_timeout = 1.0;     // s without a valid scan before re-initialising
+  bool filter_stamps = true;     // remove host read delays (see StampFilter)
 };
 
 struct LaserScanData {
   double first_beam_time = 0.0;  // s on the caller's clock (estimated)
   double sweep_time = 0.0;       // s, first to last beam
-  double time_increment = 0.0;   // s between beams within a mirror turn
+  double time_increment = 0.0;   // s, see beamTimeIncrement()
   int angle_deg = 180;
   int resolution_centideg = 100;
   MeasuredValues values;  // ranges in metres (REP-117) and raw words
@@ -101,7 +106,7 @@ class ScannerLink {
   std::unique_ptr<Session> session_;
   std::chrono::steady_clock::time_point next_attempt_{};
   std::chrono::steady_clock::time_point last_scan_{};
-  bool reported_waiting_ = false;
+  StampFilter stamp_filter_{kMirrorPeriod};
 
   mutable std::mutex mutex_;
   LinkStats stats_;

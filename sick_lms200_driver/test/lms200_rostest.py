@@ -141,8 +141,9 @@ class Lms200NodeTest(unittest.TestCase):
             return
         self.obs.wait_for(lambda: len(self.obs.scans) >= self.scans_wanted, 60.0,
                           "%d scans" % self.scans_wanted)
-        errors = sorted(abs(s.header.stamp.to_sec() - t.header.stamp.to_sec())
-                        for s, t in self.obs.matched())
+        signed = [s.header.stamp.to_sec() - t.header.stamp.to_sec() for s, t in self.obs.matched()]
+        print("STAMP_ERRORS_MS " + " ".join("%.2f" % (e * 1e3) for e in signed))
+        errors = sorted(abs(e) for e in signed)
         self.assertGreaterEqual(len(errors), self.scans_wanted - 2)
         median = errors[len(errors) // 2]
         p95 = errors[int(len(errors) * 0.95)]
