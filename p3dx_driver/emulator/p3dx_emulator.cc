@@ -52,13 +52,13 @@ void P3dxEmulator::step(double now) {
   // Input: a device at another line speed sees only garbage, so ignore it.
   uint8_t buffer[256];
   const auto* pty = dynamic_cast<const serial_io::PseudoTerminal*>(stream_);
-  const bool baud_matches = options_.baud == 0 || pty == nullptr || pty->peerBaud() == 0 ||
-                            pty->peerBaud() == options_.baud;
+  baud_matches_ = options_.baud == 0 || pty == nullptr || pty->peerBaud() == 0 ||
+                  pty->peerBaud() == options_.baud;
   for (int reads = 0; reads < 64; ++reads) {
     const serial_io::ReadResult result =
         stream_->read(buffer, sizeof(buffer), std::chrono::milliseconds(0));
     if (result.status != serial_io::IoStatus::kOk) break;
-    if (!baud_matches) continue;
+    if (!baud_matches_) continue;
     std::vector<std::vector<uint8_t>> payloads;
     const uint64_t errors_before =
         decoder_.stats().checksum_errors + decoder_.stats().length_errors;
@@ -276,8 +276,15 @@ void P3dxEmulator::handleCommand(uint8_t number, bool has_int, int value, uint16
 }
 
 void P3dxEmulator::sendPayload(const std::vector<uint8_t>& payload) {
-  const std::vector<uint8_t> packet = encodePacket(payload);
-  stream_->write(packet.data(), packet.size());
+  writeBytes(encodePacket(payload));
+}
+
+void P3dxEmulator::writeBytes(std::vector<uint8_t> bytes) {
+  // At the wrong line speed the client sees only noise.
+  if (!baud_matches_) {
+    for (uint8_t& byte : bytes) byte = static_cast<uint8_t>(random_() & 0x7F);
+  }
+  stream_->write(bytes.data(), bytes.size());
 }
 
 void P3dxEmulator::sendSip() {
@@ -321,7 +328,7 @@ void P3dxEmulator::sendSip() {
     for (uint8_t& byte : garbage) byte = static_cast<uint8_t>(random_());
     packet.insert(packet.begin(), garbage.begin(), garbage.end());
   }
-  stream_->write(packet.data(), packet.size());
+  writeBytes(std::move(packet));
   ++stats_.sips_sent;
 }
 

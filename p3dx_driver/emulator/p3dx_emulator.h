@@ -99,6 +99,7 @@ class P3dxEmulator {
   void handlePayload(const std::vector<uint8_t>& payload, double now);
   void handleCommand(uint8_t number, bool has_int, int value, uint16_t raw, double now);
   void sendPayload(const std::vector<uint8_t>& payload);
+  void writeBytes(std::vector<uint8_t> bytes);
   void sendSip();
   void integrate(double dt);
   void openSession(double now);
@@ -125,6 +126,7 @@ class P3dxEmulator {
   double last_command_ = 0.0;
   double next_sip_ = 0.0;
   bool watchdog_tripped_ = false;
+  bool baud_matches_ = true;
 };
 
 }  // namespace p3dx

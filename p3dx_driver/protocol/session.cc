@@ -97,6 +97,7 @@ bool Session::handshake() {
   decoder_.clear();
   for (int attempt = 0; attempt < options_.sync_attempts; ++attempt) {
     int step = 0;
+    int closes = 0;
     std::vector<uint8_t> reply;
     while (step < 3) {
       if (!send(encodeCommand(static_cast<Command>(step)))) return false;
@@ -109,6 +110,10 @@ bool Session::handshake() {
       }
       if (result == WaitResult::kStaleSession) {
         // An earlier client left the robot streaming: close that session.
+        if (++closes > 2) {
+          error_ = stream_->name() + ": robot keeps streaming after CLOSE (wrong baud?)";
+          break;
+        }
         ++stale_sessions_closed_;
         if (!send(encodeCommand(Command::kClose))) return false;
         drain(milliseconds(200));
