@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 namespace sick_lms200 {
 namespace {
@@ -146,6 +147,49 @@ TEST(InterlaceAssembler, AssemblesQuarterDegreeAndRestartsOnMissingPartial) {
   for (int k = 0; k < 4; ++k) EXPECT_EQ(assembler.add(partial(k), &full), k == 3);
   ASSERT_EQ(full.size(), 401u);
   for (int i = 0; i < 401; ++i) EXPECT_FLOAT_EQ(full[i], static_cast<float>(i)) << i;
+}
+
+}  // namespace
+}  // namespace sick_lms200
+
+namespace sick_lms200 {
+namespace {
+
+// Bounded randomised test: random payloads behind a valid 0xB0 header either
+// parse into consistent values or are rejected with a message; never crash.
+TEST(MeasuredValuesRandomised, RandomPayloadsParseConsistentlyOrFailWithAMessage) {
+  std::mt19937 rng(99);
+  std::uniform_int_distribution<int> byte(0, 255);
+  int parsed = 0, rejected = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    Telegram telegram;
+    telegram.command = cmd::kMeasuredValues;
+    const int count = byte(rng) % 8;
+    telegram.data.resize(trial % 2 ? 2 + 2 * count + 1 : byte(rng) % 24);
+    for (auto& b : telegram.data) b = static_cast<uint8_t>(byte(rng));
+    if (trial % 2 && telegram.data.size() >= 2) {
+      telegram.data[0] = static_cast<uint8_t>(count);
+      telegram.data[1] &= 0x7C;  // keep units valid (0/1 chosen below), partial index random
+      telegram.data[1] |= static_cast<uint8_t>((trial % 4 == 1) << 6);
+    }
+    MeasuredValues values;
+    std::string error;
+    if (parseMeasuredValues(telegram, &values, &error)) {
+      parsed++;
+      ASSERT_EQ(values.ranges.size(), values.raw.size());
+      ASSERT_EQ(telegram.data.size(), 3 + 2 * values.raw.size());
+      for (size_t i = 0; i < values.raw.size(); ++i) {
+        const float r = values.ranges[i];
+        ASSERT_TRUE(std::isnan(r) || r >= 0.0f) << r;
+        ASSERT_TRUE(values.raw[i] >= kFirstReservedCode || r <= maxRange(values.units) + 1e-3);
+      }
+    } else {
+      rejected++;
+      ASSERT_FALSE(error.empty());
+    }
+  }
+  EXPECT_GT(parsed, 2000);
+  EXPECT_GT(rejected, 2000);
 }
 
 }  // namespace

@@ -105,8 +105,9 @@ bool Session::transact(uint8_t command, const std::vector<uint8_t>& data, Telegr
 }
 
 bool Session::setMode(uint8_t mode_byte, const std::vector<uint8_t>& extra, const char* what) {
-  std::vector<uint8_t> data{mode_byte};
-  data.insert(data.end(), extra.begin(), extra.end());
+  std::vector<uint8_t> data(1 + extra.size());
+  data[0] = mode_byte;
+  std::copy(extra.begin(), extra.end(), data.begin() + 1);
   Telegram reply;
   if (!transact(cmd::kModeChange, data, &reply, waitFor(options_.reply_timeout),
                 options_.attempts)) {

@@ -166,6 +166,8 @@ class Lms200NodeTest(unittest.TestCase):
         with self.obs.lock:
             published = [s.header.stamp.to_sec() for _, s in self.obs.scans]
             truths = len(self.obs.truths)
+        print("FAULTS corrupted=%d clean_truths=%d published=%d crc_errors=%s"
+              % (len(corrupted), truths, len(published), self.obs.diagnostics.get("CRC errors")))
         for stamp in corrupted:
             nearest = min(abs(p - stamp) for p in published)
             self.assertGreater(nearest, 0.02, "a corrupted scan was published")
