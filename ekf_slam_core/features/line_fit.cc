@@ -1,0 +1,132 @@
+#include "ekf_slam_core/features/line_fit.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ekf_slam {
+
+Vector2 LineFit::normal() const { return Vector2(std::cos(theta), std::sin(theta)); }
+Vector2 LineFit::direction() const { return Vector2(-std::sin(theta), std::cos(theta)); }
+Vector2 LineFit::project(const Vector2& point) const {
+  const Vector2 n = normal();
+  return point - (n.dot(point) - p) * n;
+}
+
+bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double range_sigma,
+             double bearing_sigma, LineFit* fit, std::vector<Matrix2>* J_per_point) {
+  const int n = last - first + 1;
+  if (n < 2 || first < 0 || last >= static_cast<int>(points.size())) return false;
+  Vector2 centroid = Vector2::Zero();
+  for (int i = first; i <= last; ++i) centroid += points[i].xy;
+  centroid /= n;
+  double sxx = 0.0, syy = 0.0, sxy = 0.0;
+  for (int i = first; i <= last; ++i) {
+    const Vector2 q = points[i].xy - centroid;
+    sxx += q.x() * q.x();
+    syy += q.y() * q.y();
+    sxy += q.x() * q.y();
+  }
+  // Sum of squared distances along θ: ½(Sxx+Syy) + ½(Sxx−Syy)cos2θ + Sxy sin2θ,
+  // smallest for 2θ = atan2(−2Sxy, Syy − Sxx).
+  // Spread below rounding noise of the coordinates (coincident points) or
+  // without a dominant direction has no unique line.
+  const double spread = sxx + syy;
+  const double anisotropy = std::hypot(syy - sxx, 2.0 * sxy);
+  if (!(spread > 1e-20 * n * (1.0 + centroid.squaredNorm())) || !(anisotropy > 1e-12 * spread)) {
+    return false;
+  }
+  double theta = 0.5 * std::atan2(-2.0 * sxy, syy - sxx);
+  double c = std::cos(theta), s = std::sin(theta);
+  double p = centroid.x() * c + centroid.y() * s;
+
+  // Residuals d_i (along the normal) and along-line coordinates t_i, both
+  // relative to the centroid; D = Σt² − Σd² > 0 is ∂F/∂θ of the normal
+  // equation F(θ) = Σ d_i t_i = 0.
+  double sum_t2 = 0.0, sum_d2 = 0.0, max_d = 0.0;
+  for (int i = first; i <= last; ++i) {
+    const Vector2 q = points[i].xy - centroid;
+    const double d = q.x() * c + q.y() * s;
+    const double t = -q.x() * s + q.y() * c;
+    sum_t2 += t * t;
+    sum_d2 += d * d;
+    max_d = std::max(max_d, std::abs(d));
+  }
+  const double D = sum_t2 - sum_d2;
+  if (!(D > 0.0)) return false;
+
+  const double sign = p < 0.0 ? -1.0 : 1.0;  // flip to p >= 0: θ += π, ∂p changes sign
+  const double lever = -centroid.x() * s + centroid.y() * c;  // ∂p/∂θ at fixed centroid
+  const double var_r = range_sigma * range_sigma;
+  const double var_phi = bearing_sigma * bearing_sigma;
+  Matrix2 covariance = Matrix2::Zero();
+  if (J_per_point) J_per_point->resize(n);
+  for (int i = first; i <= last; ++i) {
+    const ScanPoint& pt = points[i];
+    const Vector2 q = pt.xy - centroid;
+    const double d = q.x() * c + q.y() * s;
+    const double t = -q.x() * s + q.y() * c;
+    // ∂(p, θ)/∂(x_i, y_i)
+    Matrix2 J_line_xy;
+    const double dtheta_dx = -(c * t - s * d) / D;
+    const double dtheta_dy = -(s * t + c * d) / D;
+    J_line_xy << sign * (c / n + lever * dtheta_dx), sign * (s / n + lever * dtheta_dy), dtheta_dx,
+        dtheta_dy;
+    // ∂(x_i, y_i)/∂(r_i, φ_i)
+    const double cb = std::cos(pt.bearing), sb = std::sin(pt.bearing);
+    Matrix2 J_xy_polar;
+    J_xy_polar << cb, -pt.range * sb, sb, pt.range * cb;
+    const Matrix2 J = J_line_xy * J_xy_polar;
+    covariance +=
+        var_r * J.col(0) * J.col(0).transpose() + var_phi * J.col(1) * J.col(1).transpose();
+    if (J_per_point) (*J_per_point)[i - first] = J;
+  }
+  if (sign < 0.0) {
+    p = -p;
+    theta += kPi;
+  }
+  fit->p = p;
+  fit->theta = wrapAngle(theta);
+  fit->covariance = covariance;
+  fit->centroid = centroid;
+  fit->rms_residual = std::sqrt(sum_d2 / n);
+  fit->max_residual = max_d;
+  fit->num_points = n;
+  return true;
+}
+
+bool intersectLines(double p1, double theta1, double p2, double theta2, Vector2* point,
+                    Matrix2* J_out_line1, Matrix2* J_out_line2) {
+  const double c1 = std::cos(theta1), s1 = std::sin(theta1);
+  const double c2 = std::cos(theta2), s2 = std::sin(theta2);
+  const double det = c1 * s2 - s1 * c2;  // sin(θ2 − θ1)
+  if (!(std::abs(det) >= 1e-6)) return false;
+  // A x = (p1, p2) with rows (cos θk, sin θk).
+  Matrix2 A_inv;
+  A_inv << s2, -s1, -c2, c1;
+  A_inv /= det;
+  const Vector2 x = A_inv * Vector2(p1, p2);
+  // Row k: ∂/∂θk gives (−sθk x + cθk y) + A_k ∂x/∂θk = 0.
+  if (J_out_line1) {
+    J_out_line1->col(0) = A_inv.col(0);
+    J_out_line1->col(1) = A_inv.col(0) * (s1 * x.x() - c1 * x.y());
+  }
+  if (J_out_line2) {
+    J_out_line2->col(0) = A_inv.col(1);
+    J_out_line2->col(1) = A_inv.col(1) * (s2 * x.x() - c2 * x.y());
+  }
+  *point = x;
+  return true;
+}
+
+bool pointToRangeBearing(const Vector2& point, Vector2* range_bearing, Matrix2* J_out_point) {
+  const double r2 = point.squaredNorm();
+  if (!(r2 > 0.0)) return false;
+  const double r = std::sqrt(r2);
+  if (J_out_point) {
+    *J_out_point << point.x() / r, point.y() / r, -point.y() / r2, point.x() / r2;
+  }
+  *range_bearing = Vector2(r, std::atan2(point.y(), point.x()));
+  return true;
+}
+
+}  // namespace ekf_slam

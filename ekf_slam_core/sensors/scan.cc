@@ -1,0 +1,30 @@
+#include "ekf_slam_core/sensors/scan.h"
+
+#include <sstream>
+
+namespace ekf_slam {
+
+int countValidReadings(const Scan& scan) {
+  int count = 0;
+  for (int i = 0; i < scan.size(); ++i) count += scan.isValid(i) ? 1 : 0;
+  return count;
+}
+
+std::string validateScan(const Scan& scan) {
+  std::ostringstream error;
+  if (!std::isfinite(scan.angle_min)) {
+    error << "Scan.angle_min must be finite, got " << scan.angle_min;
+  } else if (!std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0) {
+    error << "Scan.angle_increment must be finite and non-zero, got " << scan.angle_increment;
+  } else if (!std::isfinite(scan.range_min) || scan.range_min < 0.0) {
+    error << "Scan.range_min must be finite and >= 0, got " << scan.range_min;
+  } else if (!(scan.range_max > scan.range_min)) {
+    error << "Scan.range_max must be greater than range_min (" << scan.range_min << "), got "
+          << scan.range_max;
+  } else if (!std::isfinite(scan.stamp)) {
+    error << "Scan.stamp must be finite, got " << scan.stamp;
+  }
+  return error.str();
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,50 @@
+// One planar laser sweep as the core sees it (no ROS): the LMS200 or a
+// simulated scanner. ekf_slam_ros/conversions turns a sensor_msgs/LaserScan
+// into this struct at the boundary.
+//
+// Frame: the laser (sensor) frame, x forward, y left (REP-103). Beam i points
+// at bearing angle(i) = angle_min + i * angle_increment (rad, counter-clockwise
+// from the laser x axis) and reports the distance ranges[i] (m).
+//
+// Invalid-reading convention (REP-117 plus the LMS200 logs): a reading is
+// used only when it is finite, >= range_min and < range_max. So NaN
+// (erroneous), -inf (too close), +inf (no return), and every value at or above
+// range_max are "no valid return". In the Freiburg logs range_max is 80 m and
+// 81.83 m / 81.91 m encode "no return"; the LMS200's reserved error codes
+// (dazzle, no echo, ...) all lie at or above its range_max in cm or mm mode,
+// so they fall out by the same rule. Nothing is ever removed from `ranges`:
+// beam indices stay aligned with bearings.
+#pragma once
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace ekf_slam {
+
+struct Scan {
+  std::vector<double> ranges;    // m, one per beam; invalid values allowed (see above)
+  double angle_min = 0.0;        // rad, bearing of beam 0 in the laser frame
+  double angle_increment = 0.0;  // rad, bearing step between beams (may be negative)
+  double range_min = 0.0;        // m, readings below are invalid
+  double range_max = 0.0;        // m, readings at or above are invalid ("no return")
+  double stamp = 0.0;            // s, acquisition time of the sweep (data time, not now())
+
+  int size() const { return static_cast<int>(ranges.size()); }
+  double angle(int i) const { return angle_min + i * angle_increment; }
+  // True when beam i carries a usable range (finite, in [range_min, range_max)).
+  bool isValid(int i) const {
+    const double r = ranges[i];
+    return std::isfinite(r) && r >= range_min && r < range_max;
+  }
+};
+
+// Number of beams that carry a usable range.
+int countValidReadings(const Scan& scan);
+
+// Empty when the scan's geometry is usable, otherwise a message naming the
+// bad field (e.g. "Scan.angle_increment must be finite and non-zero, got 0").
+// Bad range values are not an error: they are invalid readings.
+std::string validateScan(const Scan& scan);
+
+}  // namespace ekf_slam
