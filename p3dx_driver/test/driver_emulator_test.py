@@ -5,6 +5,7 @@ Private parameter ~scenario selects the cases: "basic" (handshake, 1 m
 square, cmd_vel timeout, unplug/replug) or "corruption" (5 % corrupted SIPs).
 """
 import math
+import subprocess
 import threading
 import time
 import unittest
@@ -195,6 +196,15 @@ class BasicTest(DriverEmulatorTest):
         self.assertLess(jump, POSITION_TOLERANCE, "odometry jumped %.4f m on reconnect" % jump)
         self.assertLess(abs(wrap(yaw_of(after) - yaw_of(before))), ANGLE_TOLERANCE)
         rospy.loginfo("reconnected %.2f s after replug", delay)
+
+
+    def test_5_unknown_parameter_is_rejected_by_name(self):
+        result = subprocess.run(
+            ["rosrun", "ekf_slam", "p3dx_driver_node", "__name:=p3dx_bad_config",
+             "_port:=/tmp/p3dx_no_such_port", "_cmd_vel_timeuot:=1.0"],
+            capture_output=True, text=True, timeout=30)
+        self.assertNotEqual(result.returncode, 0, "a misspelt parameter was accepted")
+        self.assertIn("cmd_vel_timeuot", result.stdout + result.stderr)
 
 
 class CorruptionTest(DriverEmulatorTest):
