@@ -85,7 +85,7 @@ FilterStatus EkfSlam::predict(const OdometryControl& u, double dt) {
   if (!u.allFinite() || !std::isfinite(dt)) return FilterStatus::kNonFiniteInput;
   if (!(dt > 0.0)) return FilterStatus::kBadTimeStep;
   if (std::abs(u.trans) > options_.max_step_translation ||
-      std::abs(u.rot1) + std::abs(u.rot2) > options_.max_step_rotation) {
+      std::abs(wrapAngle(u.rot1 + u.rot2)) > options_.max_step_rotation) {
     return FilterStatus::kOdometryJump;
   }
   Matrix3 F, G;

@@ -8,7 +8,13 @@ IterationReport runIteration(EkfSlam& filter, const AssociationOptions& associat
   IterationReport report;
   report.predict_status = filter.predict(odom_previous, odom_current, dt);
   if (report.predict_status != FilterStatus::kOk) return report;
+  observe(filter, association, observations, &report);
+  return report;
+}
 
+void observe(EkfSlam& filter, const AssociationOptions& association,
+             const std::vector<PointObservation>& observations, IterationReport* out) {
+  IterationReport& report = *out;
   report.association = associate(filter, observations, association);
   report.matches = report.association.matches();
   report.update_status = filter.update(observations, report.matches, &report.nis);
@@ -26,7 +32,6 @@ IterationReport runIteration(EkfSlam& filter, const AssociationOptions& associat
     }
   }
   report.pruned = filter.pruneTentative();
-  return report;
 }
 
 }  // namespace ekf_slam

@@ -33,4 +33,9 @@ IterationReport runIteration(EkfSlam& filter, const AssociationOptions& associat
                              const Pose2& odom_previous, const Pose2& odom_current, double dt,
                              const std::vector<PointObservation>& observations);
 
+// The observation half of an iteration (associate, update, augment, prune),
+// for a caller that ran the prediction itself or has none (the first scan).
+void observe(EkfSlam& filter, const AssociationOptions& association,
+             const std::vector<PointObservation>& observations, IterationReport* report);
+
 }  // namespace ekf_slam

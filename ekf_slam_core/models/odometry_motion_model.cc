@@ -5,9 +5,12 @@
 namespace ekf_slam {
 namespace {
 
-// Below this translation (m) the heading of the translation is undefined;
-// the whole motion is taken as one rotation.
-constexpr double kMinTranslationForHeading = 1e-6;
+// Below this translation (m) the direction of travel is not defined by the
+// data: a millimetre of lateral wheel jitter during a turn on the spot would
+// otherwise read as rot1 ≈ ±90°, rot2 ≈ ∓90°, and Q(u) would model two large
+// rotations that never happened. Such a step is a turn plus its forward
+// component; the lateral part (< 1 cm) is dropped.
+constexpr double kMinTranslationForHeading = 0.01;
 
 }  // namespace
 
@@ -37,7 +40,7 @@ OdometryControl controlFromOdometry(const Pose2& odom_previous, const Pose2& odo
   const double distance = std::hypot(d.x, d.y);
   if (distance < kMinTranslationForHeading) {
     u.rot1 = 0.0;
-    u.trans = 0.0;
+    u.trans = d.x;
     u.rot2 = d.theta;
     return u;
   }

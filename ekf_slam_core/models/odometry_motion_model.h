@@ -8,7 +8,9 @@
 //   u = (rot1, trans, rot2),  rot1 = atan2(dy, dx), trans = |(dx, dy)|,
 //                             rot2 = dθ − rot1,
 // with trans taken negative (and rot1 turned by π) when the robot backs up,
-// so a reverse motion is not mistaken for a half turn. The thesis allows only
+// so a reverse motion is not mistaken for a half turn, and, below 1 cm of
+// translation, where the direction of travel is undefined, u = (0, dx, dθ)
+// (a turn on the spot with its small forward part; lateral jitter dropped). The thesis allows only
 // a pure translation or a pure rotation per step (rot2 = 0); this model
 // accepts any motion, so every scan can be an iteration.
 //

@@ -1,0 +1,196 @@
+#include "ekf_slam_core/pipeline/slam_pipeline.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace ekf_slam {
+
+const char* toString(ScanOutcome outcome) {
+  switch (outcome) {
+    case ScanOutcome::kIterated:
+      return "iterated";
+    case ScanOutcome::kSkippedNoMotion:
+      return "skipped (no motion)";
+    case ScanOutcome::kSkippedTimeNotIncreasing:
+      return "skipped (time not increasing)";
+    case ScanOutcome::kRejectedOdometryJump:
+      return "rejected (odometry jump)";
+    case ScanOutcome::kRejectedBadInput:
+      return "rejected (bad input)";
+  }
+  return "unknown";
+}
+
+std::string PipelineOptions::validate() const {
+  std::string error = validateFeatureOptions(features);
+  if (!error.empty()) return "features: " + error;
+  error = filter.validate();
+  if (!error.empty()) return "filter: " + error;
+  error = association.validate();
+  if (!error.empty()) return "association: " + error;
+  if (!initial_pose_covariance.allFinite() ||
+      !initial_pose_covariance.isApprox(initial_pose_covariance.transpose()) ||
+      initial_pose_covariance.diagonal().minCoeff() < 0.0) {
+    return "initial_pose_covariance must be finite, symmetric, with a non-negative diagonal";
+  }
+  if (!(min_travel_distance >= 0.0)) return "min_travel_distance must be >= 0 (m)";
+  if (!(min_travel_angle >= 0.0)) return "min_travel_angle must be >= 0 (rad)";
+  if (!(max_landmark_range > 0.0)) return "max_landmark_range must be > 0 (m)";
+  return "";
+}
+
+SlamPipeline::SlamPipeline(const PipelineOptions& options)
+    : options_(options), filter_(options.filter, Pose2(), options.initial_pose_covariance) {}
+
+Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
+  return compose(filter_.pose(), between(last_odometry_, odometry));
+}
+
+Pose2 SlamPipeline::mapToOdom() const { return compose(filter_.pose(), inverse(last_odometry_)); }
+
+ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
+  ++counters_.scans;
+  ScanResult out;
+  auto record = [&]() {
+    ScanRecord r;
+    r.stamp = scan.stamp;
+    r.filtered = out.pose;
+    r.odometry = odometry;
+    r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
+    r.odometry_at_iteration = last_odometry_;
+    records_.push_back(r);
+  };
+
+  const std::string scan_error = validateScan(scan);
+  if (!odometry.allFinite() || !scan_error.empty() || !std::isfinite(scan.stamp)) {
+    ++counters_.bad_input;
+    out.outcome = ScanOutcome::kRejectedBadInput;
+    out.message = !odometry.allFinite() ? "odometry pose is not finite"
+                  : !scan_error.empty() ? scan_error
+                                        : "scan stamp is not finite";
+    if (!odometry.allFinite()) {
+      out.pose = filter_.pose();
+      return out;  // no usable odometry: nothing to record against
+    }
+    out.pose = initialised_ ? deadReckoned(odometry) : Pose2();
+    if (initialised_) record();
+    return out;
+  }
+
+  if (!initialised_) {
+    last_odometry_ = odometry;
+    last_stamp_ = scan.stamp;
+    initialised_ = true;
+    iterate(scan, odometry, /*predict=*/false, 0.0, &out);
+    record();
+    return out;
+  }
+
+  const double dt = scan.stamp - last_stamp_;
+  if (!(dt > 0.0)) {
+    ++counters_.time_not_increasing;
+    out.outcome = ScanOutcome::kSkippedTimeNotIncreasing;
+    std::ostringstream message;
+    message.precision(6);
+    message << std::fixed << "scan stamp " << scan.stamp << " is not after the last iteration's "
+            << last_stamp_ << " (" << dt << " s): scan not used for an update";
+    out.message = message.str();
+    out.pose = deadReckoned(odometry);
+    record();
+    return out;
+  }
+
+  const Pose2 motion = between(last_odometry_, odometry);
+  if ((options_.min_travel_distance > 0.0 || options_.min_travel_angle > 0.0) &&
+      std::hypot(motion.x, motion.y) < options_.min_travel_distance &&
+      std::abs(motion.theta) < options_.min_travel_angle) {
+    ++counters_.skipped_no_motion;
+    out.outcome = ScanOutcome::kSkippedNoMotion;
+    out.pose = deadReckoned(odometry);
+    record();
+    return out;
+  }
+
+  iterate(scan, odometry, /*predict=*/true, dt, &out);
+  record();
+  return out;
+}
+
+void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt,
+                           ScanResult* out) {
+  if (predict) {
+    const FilterStatus status = filter_.predict(last_odometry_, odometry, dt);
+    if (status != FilterStatus::kOk) {
+      const Pose2 motion = between(last_odometry_, odometry);
+      std::ostringstream message;
+      message << "odometry increment (" << motion.x << " m, " << motion.y << " m, "
+              << radToDeg(motion.theta) << " deg) over " << dt
+              << " s refused: " << toString(status);
+      if (status == FilterStatus::kOdometryJump) {
+        ++counters_.odometry_jumps;
+        out->outcome = ScanOutcome::kRejectedOdometryJump;
+        message << "; odometry re-anchored, the increment is discarded";
+        last_odometry_ = odometry;  // re-anchor: later increments start from here
+        last_stamp_ = scan.stamp;
+      } else {
+        ++counters_.bad_input;
+        out->outcome = ScanOutcome::kRejectedBadInput;
+      }
+      out->message = message.str();
+      out->pose = filter_.pose();
+      return;
+    }
+    recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
+  }
+  last_odometry_ = odometry;
+  last_stamp_ = scan.stamp;
+
+  out->features = extractFeatures(scan, options_.features);
+  for (const PointFeature& point : out->features.points_of_interest) {
+    if (!point.landmark_candidate || point.range > options_.max_landmark_range) continue;
+    PointObservation obs;
+    obs.z = {point.range, point.bearing};
+    obs.covariance = point.range_bearing_covariance;
+    out->observations.push_back(obs);
+  }
+  out->iteration.predict_status = FilterStatus::kOk;
+  observe(filter_, options_.association, out->observations, &out->iteration);
+  recorder_.addFiltered(scan.stamp, filter_.pose(), filter_.poseCovariance());
+
+  ++counters_.iterations;
+  if (out->iteration.update_status != FilterStatus::kOk) ++counters_.update_failures;
+  counters_.observations += static_cast<long>(out->observations.size());
+  counters_.matches += static_cast<long>(out->iteration.matches.size());
+  counters_.pruned += out->iteration.pruned;
+  for (const ObservationAssociation& a : out->iteration.association.observations) {
+    if (a.decision == AssociationDecision::kAmbiguous) ++counters_.ambiguous;
+  }
+  counters_.new_landmarks += static_cast<long>(out->iteration.new_landmark_ids.size());
+  for (double nis : out->iteration.nis) counters_.nis_sum += nis;
+  out->outcome = ScanOutcome::kIterated;
+  out->pose = filter_.pose();
+}
+
+std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
+  std::vector<StampedPose> out;
+  out.reserve(records_.size());
+  for (const ScanRecord& r : records_) out.push_back({r.stamp, r.filtered});
+  return out;
+}
+
+std::vector<StampedPose> SlamPipeline::smoothedScanPoses() const {
+  const std::vector<SmoothedPose> smoothed = smoothTrajectory(recorder_.steps());
+  std::vector<StampedPose> out;
+  out.reserve(records_.size());
+  for (const ScanRecord& r : records_) {
+    if (r.iteration < 0 || r.iteration >= static_cast<int>(smoothed.size())) {
+      out.push_back({r.stamp, r.filtered});
+      continue;
+    }
+    out.push_back({r.stamp, compose(smoothed[r.iteration].pose,
+                                    between(r.odometry_at_iteration, r.odometry))});
+  }
+  return out;
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,124 @@
+// The whole SLAM front- and back-end behind one object: a laser scan and the
+// robot's odometry pose at the scan's stamp go in; features are extracted,
+// the EKF iterates, and every scan gets a pose in the map frame. The live ROS
+// node, the offline bag runner and the tests call this same object, so a bag
+// gives the same answer live and offline.
+//
+// Frames: `odometry` is odom → base_link from the robot (never corrected,
+// thesis §3.4.2); the filter estimates map → base_link; map → odom follows.
+// The laser pose on the robot (base_link → laser) is in options.filter.
+//
+// Policies for imperfect input, each counted in PipelineCounters:
+// - The first scan initialises the map (no prediction).
+// - A stamp not after the last iteration's (logs whose time goes backwards,
+//   duplicates): no iteration; the scan still gets a dead-reckoned pose.
+// - Less motion than min_travel_* since the last iteration: no iteration
+//   (the thesis iterates after each discrete motion); dead-reckoned pose.
+// - An odometry increment beyond the filter's jump bounds: the increment is
+//   discarded (the odometry is re-anchored), no iteration.
+// - A scan whose geometry is unusable: no iteration, pose dead-reckoned.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/eval/relations.h"
+#include "ekf_slam_core/features/extract_features.h"
+#include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/smoother/rts_smoother.h"
+
+namespace ekf_slam {
+
+struct PipelineOptions {
+  FeatureOptions features;
+  FilterOptions filter;
+  AssociationOptions association;
+  Matrix3 initial_pose_covariance = Matrix3::Zero();  // the map frame is the first pose
+  double min_travel_distance = 0.0;  // m: iterate only after this much translation …
+  double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
+  double max_landmark_range = 20.0;  // m: farther point features are not used
+
+  std::string validate() const;  // empty when valid, else names the bad field
+};
+
+enum class ScanOutcome {
+  kIterated,         // predict + update (or the initialising first scan)
+  kSkippedNoMotion,  // below min_travel_*
+  kSkippedTimeNotIncreasing,
+  kRejectedOdometryJump,
+  kRejectedBadInput,  // unusable scan geometry or non-finite odometry
+};
+
+const char* toString(ScanOutcome outcome);
+
+struct ScanResult {
+  ScanOutcome outcome = ScanOutcome::kIterated;
+  Pose2 pose;                                  // map → base_link at the scan's stamp
+  FeatureSet features;                         // what the extractor found (empty when not run)
+  std::vector<PointObservation> observations;  // the landmark candidates used
+  IterationReport iteration;                   // association, NIS, new landmarks (when iterated)
+  std::string message;                         // why a scan was not iterated, for the log
+};
+
+struct PipelineCounters {
+  long scans = 0;
+  long iterations = 0;
+  long skipped_no_motion = 0;
+  long time_not_increasing = 0;
+  long odometry_jumps = 0;
+  long bad_input = 0;
+  long update_failures = 0;  // iterations whose update was refused
+  long observations = 0;     // landmark candidates offered to the filter
+  long matches = 0;
+  long ambiguous = 0;  // between the gates, or lost to a better observation
+  long new_landmarks = 0;
+  long pruned = 0;       // tentative landmarks removed
+  double nis_sum = 0.0;  // over all matches
+};
+
+// One entry per scan, for the trajectory files and the smoother.
+struct ScanRecord {
+  double stamp = 0.0;
+  Pose2 filtered;      // the pose given for the scan when it was processed
+  Pose2 odometry;      // odom → base_link at the scan
+  int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
+  Pose2 odometry_at_iteration;  // the odometry at that iteration
+};
+
+class SlamPipeline {
+ public:
+  // Options must be valid (check validate()).
+  explicit SlamPipeline(const PipelineOptions& options);
+
+  ScanResult processScan(const Scan& scan, const Pose2& odometry);
+
+  const EkfSlam& filter() const { return filter_; }
+  const PipelineOptions& options() const { return options_; }
+  const PipelineCounters& counters() const { return counters_; }
+  const std::vector<ScanRecord>& scans() const { return records_; }
+  const TrajectoryRecorder& iterations() const { return recorder_; }
+
+  // map → odom, so that map → odom → base_link is the current estimate.
+  Pose2 mapToOdom() const;
+
+  // Poses for every scan, from the RTS-smoothed iterations (scans between
+  // iterations follow their odometry from the last iteration).
+  std::vector<StampedPose> smoothedScanPoses() const;
+  std::vector<StampedPose> filteredScanPoses() const;
+
+ private:
+  void iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt, ScanResult* out);
+  Pose2 deadReckoned(const Pose2& odometry) const;
+
+  PipelineOptions options_;
+  EkfSlam filter_;
+  TrajectoryRecorder recorder_;
+  PipelineCounters counters_;
+  std::vector<ScanRecord> records_;
+  bool initialised_ = false;
+  Pose2 last_odometry_;  // odometry at the last iteration (or re-anchor)
+  double last_stamp_ = 0.0;
+  Pose2 latest_odometry_;  // odometry at the latest scan
+};
+
+}  // namespace ekf_slam
