@@ -1,0 +1,166 @@
+#include "ekf_slam_ros/offline/log_input.h"
+
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "ekf_slam_core/io/carmen_log.h"
+#include "ekf_slam_core/pipeline/odometry_track.h"
+
+namespace ekf_slam {
+namespace {
+
+std::string stripSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+double yawOf(double x, double y, double z, double w) {
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+}
+
+Scan toScan(const sensor_msgs::LaserScan& msg) {
+  Scan scan;
+  scan.ranges.assign(msg.ranges.begin(), msg.ranges.end());
+  scan.angle_min = msg.angle_min;
+  scan.angle_increment = msg.angle_increment;
+  scan.range_min = msg.range_min;
+  scan.range_max = msg.range_max;
+  scan.stamp = msg.header.stamp.toSec();
+  return scan;
+}
+
+void finish(LogData* out, const OdometryTrack& track, double max_gap) {
+  out->odometry_samples = static_cast<long>(track.size());
+  double previous = -std::numeric_limits<double>::infinity();
+  for (LoggedScan& s : out->scans) {
+    if (track.poseAt(s.scan.stamp, max_gap, &s.odometry) != OdometryTrack::Lookup::kInterpolated) {
+      ++out->odometry_gaps;
+    }
+    if (s.scan.stamp <= previous) ++out->scans_out_of_time_order;
+    previous = s.scan.stamp;
+  }
+  if (!out->scans.empty()) {
+    double lo = out->scans.front().scan.stamp, hi = lo;
+    for (const LoggedScan& s : out->scans) {
+      lo = std::min(lo, s.scan.stamp);
+      hi = std::max(hi, s.scan.stamp);
+    }
+    out->first_stamp = lo;
+    out->last_stamp = hi;
+  }
+}
+
+}  // namespace
+
+std::string readBag(const std::string& path, const InputOptions& options, LogData* out) {
+  *out = LogData();
+  LogData data;
+  OdometryTrack track;
+  const std::string odom_frame = stripSlash(options.odom_frame);
+  const std::string base_frame = stripSlash(options.base_frame);
+  std::vector<std::pair<std::string, Pose2>> static_children;  // base_frame → child
+  try {
+    rosbag::Bag bag;
+    bag.open(path, rosbag::bagmode::Read);
+    rosbag::View view(bag);
+    for (const rosbag::MessageInstance& m : view) {
+      const std::string& topic = m.getTopic();
+      if (topic == options.scan_topic) {
+        const sensor_msgs::LaserScan::ConstPtr msg = m.instantiate<sensor_msgs::LaserScan>();
+        if (!msg) return path + ": topic " + topic + " is not sensor_msgs/LaserScan";
+        LoggedScan s;
+        s.seq = msg->header.seq;
+        s.scan = toScan(*msg);
+        if (data.laser_frame.empty()) data.laser_frame = stripSlash(msg->header.frame_id);
+        data.scans.push_back(std::move(s));
+      } else if (options.odometry_source == "odom" && topic == options.odom_topic) {
+        const nav_msgs::Odometry::ConstPtr msg = m.instantiate<nav_msgs::Odometry>();
+        if (!msg) return path + ": topic " + topic + " is not nav_msgs/Odometry";
+        const auto& p = msg->pose.pose;
+        track.add(msg->header.stamp.toSec(),
+                  Pose2(p.position.x, p.position.y,
+                        yawOf(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)));
+      } else if (topic == "/tf" || topic == "/tf_static") {
+        const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
+        if (!msg) continue;
+        for (const auto& t : msg->transforms) {
+          const std::string parent = stripSlash(t.header.frame_id);
+          const std::string child = stripSlash(t.child_frame_id);
+          const auto& r = t.transform.rotation;
+          const Pose2 pose(t.transform.translation.x, t.transform.translation.y,
+                           yawOf(r.x, r.y, r.z, r.w));
+          if (options.odometry_source == "tf" && parent == odom_frame && child == base_frame) {
+            track.add(t.header.stamp.toSec(), pose);
+          } else if (parent == base_frame) {
+            static_children.emplace_back(child, pose);
+          }
+        }
+      }
+    }
+    bag.close();
+  } catch (const rosbag::BagException& e) {
+    return path + ": cannot read the bag (missing, truncated or corrupt): " + e.what();
+  } catch (const std::exception& e) {
+    return path + ": error while reading the bag: " + e.what();
+  }
+  if (data.scans.empty()) return path + ": no scans: topic " + options.scan_topic + " is empty";
+  if (track.size() == 0) {
+    return path + ": no odometry: " +
+           (options.odometry_source == "odom"
+                ? "topic " + options.odom_topic + " has no messages"
+                : "tf has no " + odom_frame + " -> " + base_frame + " transform");
+  }
+  for (const auto& [child, pose] : static_children) {
+    if (child == data.laser_frame) {
+      data.laser_pose = pose;
+      data.laser_pose_found = true;
+    }
+  }
+  if (data.laser_frame == base_frame) data.laser_pose_found = true;  // laser at base_link
+  track.finalize();
+  // File order: by header.seq when the log numbers its scans, else as stored.
+  const bool numbered = std::any_of(data.scans.begin(), data.scans.end(),
+                                    [](const LoggedScan& s) { return s.seq != 0; });
+  if (numbered) {
+    std::stable_sort(data.scans.begin(), data.scans.end(),
+                     [](const LoggedScan& a, const LoggedScan& b) { return a.seq < b.seq; });
+  }
+  finish(&data, track, options.max_odometry_gap);
+  *out = std::move(data);
+  return "";
+}
+
+std::string readCarmen(const std::string& path, LogData* out) {
+  *out = LogData();
+  CarmenLog log;
+  const std::string error = readCarmenLog(path, &log);
+  if (!error.empty()) return error;
+  if (log.lasers.empty()) return path + ": no laser scans (FLASER or ROBOTLASER1 lines)";
+  LogData data;
+  OdometryTrack track;
+  uint32_t seq = 0;
+  for (const CarmenLaser& laser : log.lasers) {
+    LoggedScan s;
+    s.seq = seq++;
+    s.scan = laser.scan;
+    track.add(laser.scan.stamp, laser.robot_odometry);  // each scan carries its odometry
+    data.scans.push_back(std::move(s));
+  }
+  data.laser_pose = log.lasers.front().laser_in_robot;
+  data.laser_pose_found = true;
+  data.laser_frame = "laser";
+  track.finalize();
+  finish(&data, track, 1e-9);
+  for (size_t i = 0; i < data.scans.size(); ++i)
+    data.scans[i].odometry = log.lasers[i].robot_odometry;
+  data.odometry_gaps = 0;
+  *out = std::move(data);
+  return "";
+}
+
+}  // namespace ekf_slam

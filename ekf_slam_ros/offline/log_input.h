@@ -1,0 +1,47 @@
+// Recorded data for offline SLAM: a ROS bag (rosbag C++ API, no roscore) or
+// a CARMEN log, turned into scans in file order, each with the robot's
+// odometry pose at the scan's stamp and the laser's mounting pose.
+//
+// Pitfalls of the real logs handled here (../shared/datasets/README.md):
+// - stamps going backwards: scans keep their file order (header.seq), they are
+//   never sorted by time; the pipeline decides what a late stamp means.
+// - odometry at other instants than the scans: interpolated at each scan's
+//   stamp (OdometryTrack); gaps beyond max_odometry_gap use the nearest
+//   sample and are counted.
+// - "no return" ranges above range_max and an all-zero odometry covariance:
+//   passed through; the scan and motion models handle them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/sensors/scan.h"
+#include "ekf_slam_ros/offline/slam_config.h"
+
+namespace ekf_slam {
+
+struct LoggedScan {
+  uint32_t seq = 0;
+  Scan scan;
+  Pose2 odometry;  // odom → base_link at scan.stamp
+};
+
+struct LogData {
+  std::vector<LoggedScan> scans;  // file order
+  bool laser_pose_found = false;
+  Pose2 laser_pose;  // base_link → laser, when found in the log
+  std::string laser_frame;
+  long odometry_samples = 0;
+  long odometry_gaps = 0;  // scans whose odometry was not interpolated
+  long scans_out_of_time_order = 0;
+  double first_stamp = 0.0, last_stamp = 0.0;
+  double duration() const { return last_stamp - first_stamp; }
+};
+
+// Empty string on success; otherwise what is wrong, naming the file and, where
+// it applies, the topic or frame ("no odometry: topic /odom has no messages").
+std::string readBag(const std::string& path, const InputOptions& options, LogData* out);
+std::string readCarmen(const std::string& path, LogData* out);
+
+}  // namespace ekf_slam

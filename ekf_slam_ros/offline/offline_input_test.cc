@@ -1,0 +1,162 @@
+// The configuration loader and the log readers of the offline runner, with
+// real bag files written here by the rosbag API and the shipped datasets.
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "ekf_slam_ros/offline/log_input.h"
+
+namespace ekf_slam {
+namespace {
+
+const std::string kSource = EKF_SLAM_SOURCE_DIR;
+
+TEST(SlamConfig, ShippedFileLoadsAndMatchesTheDefaults) {
+  SlamConfig config;
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam.yaml", &config), "");
+  // The file documents the defaults: loading it changes nothing.
+  const SlamConfig defaults;
+  EXPECT_EQ(config.pipeline.features.split_threshold, defaults.pipeline.features.split_threshold);
+  EXPECT_EQ(config.pipeline.filter.motion_noise.trans_per_trans,
+            defaults.pipeline.filter.motion_noise.trans_per_trans);
+  EXPECT_EQ(config.pipeline.association.gate_probability,
+            defaults.pipeline.association.gate_probability);
+  EXPECT_EQ(config.map.resolution, defaults.map.resolution);
+  EXPECT_FALSE(config.laser_pose_given);
+}
+
+TEST(SlamConfig, UnknownKeysAndBadValuesAreNamed) {
+  SlamConfig config;
+  const std::string error = loadSlamConfig(YAML::Load(R"(
+filter:
+  motion_noise: {rot_per_rot: -1, rot_per_rott: 0.1}
+  laser_pose: [0.1, 0.2]
+association: {method: nearest}
+mapp: {}
+map: {resolution: fine}
+)"),
+                                           &config);
+  for (const char* expected : {"filter.motion_noise.rot_per_rot: must be in [0,",
+                               "filter.motion_noise.rot_per_rott: unknown key",
+                               "filter.laser_pose: must be a list of 3 numbers",
+                               "association.method: must be one of nn, jcbb", "mapp: unknown key",
+                               "map.resolution: must be a number"}) {
+    EXPECT_NE(error.find(expected), std::string::npos) << "missing '" << expected << "' in:\n"
+                                                       << error;
+  }
+  // Nothing is applied from a rejected file.
+  EXPECT_EQ(config.map.resolution, SlamConfig().map.resolution);
+  SlamConfig laser;
+  ASSERT_EQ(loadSlamConfig(YAML::Load("filter: {laser_pose: [0.16, 0, 0]}"), &laser), "");
+  EXPECT_TRUE(laser.laser_pose_given);
+  EXPECT_DOUBLE_EQ(laser.pipeline.filter.laser_pose.x, 0.16);
+}
+
+// A small bag as the Freiburg logs are laid out: /scan, /odom, /tf_static.
+std::string writeBag(const std::string& path, bool with_odometry, int scans = 20) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  for (int i = 0; i < scans; ++i) {
+    const ros::Time t(100.0 + 0.1 * i);
+    sensor_msgs::LaserScan scan;
+    scan.header.stamp = t;
+    scan.header.seq = i;
+    scan.header.frame_id = "laser";
+    scan.angle_min = -M_PI / 2;
+    scan.angle_increment = M_PI / 179;
+    scan.angle_max = M_PI / 2;
+    scan.range_min = 0.1;
+    scan.range_max = 80.0;
+    scan.ranges.assign(180, 3.0);
+    bag.write("/scan", t, scan);
+    if (with_odometry) {
+      nav_msgs::Odometry odom;
+      odom.header.stamp = t - ros::Duration(0.05);
+      odom.pose.pose.position.x = 0.1 * i - 0.05;
+      odom.pose.pose.orientation.w = 1.0;
+      bag.write("/odom", odom.header.stamp, odom);
+    }
+  }
+  tf2_msgs::TFMessage statics;
+  geometry_msgs::TransformStamped mount;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "laser";
+  mount.transform.translation.x = 0.16;
+  mount.transform.rotation.w = 1.0;
+  statics.transforms.push_back(mount);
+  bag.write("/tf_static", ros::Time(100.0), statics);
+  bag.close();
+  return path;
+}
+
+class TempBag : public ::testing::Test {
+ protected:
+  void TearDown() override { ::unlink(path_.c_str()); }
+  std::string path_ = "/tmp/offline_input_test_" + std::to_string(::getpid()) + ".bag";
+};
+
+TEST_F(TempBag, ReadsScansOdometryAndTheLaserMount) {
+  writeBag(path_, true);
+  LogData log;
+  ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
+  ASSERT_EQ(log.scans.size(), 20u);
+  EXPECT_TRUE(log.laser_pose_found);
+  EXPECT_DOUBLE_EQ(log.laser_pose.x, 0.16);
+  // Odometry interpolated at the scan stamps: x = 0.1 i.
+  EXPECT_NEAR(log.scans[7].odometry.x, 0.7, 1e-9);
+  // The last scan lies after the last odometry sample: counted, not invented.
+  EXPECT_EQ(log.odometry_gaps, 1);
+  EXPECT_EQ(log.scans_out_of_time_order, 0);
+}
+
+TEST_F(TempBag, ABagWithoutOdometryIsRefusedByName) {
+  writeBag(path_, false);
+  LogData log;
+  const std::string error = readBag(path_, InputOptions(), &log);
+  EXPECT_NE(error.find("no odometry: topic /odom has no messages"), std::string::npos) << error;
+  EXPECT_TRUE(log.scans.empty()) << "no partial result";
+  InputOptions tf;
+  tf.odometry_source = "tf";
+  EXPECT_NE(readBag(path_, tf, &log).find("tf has no odom -> base_link transform"),
+            std::string::npos);
+}
+
+TEST_F(TempBag, ATruncatedBagIsRefusedNotHalfRead) {
+  writeBag(path_, true, 400);
+  std::ifstream in(path_, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  std::ofstream(path_, std::ios::binary | std::ios::trunc).write(bytes.data(), bytes.size() / 2);
+  LogData log;
+  const std::string error = readBag(path_, InputOptions(), &log);
+  EXPECT_NE(error.find(path_), std::string::npos) << error;
+  EXPECT_NE(error.find("truncated or corrupt"), std::string::npos) << error;
+  EXPECT_TRUE(log.scans.empty());
+  EXPECT_NE(readBag("/nonexistent/x.bag", InputOptions(), &log).find("cannot read the bag"),
+            std::string::npos);
+}
+
+TEST(RealLogs, IntelScansComeInFileOrderWithOdometry) {
+  const std::string bag = kSource + "/../shared/datasets/intel.orig.bag";
+  if (::access(bag.c_str(), R_OK) != 0) {
+    GTEST_SKIP() << "../shared/datasets/intel.orig.bag not found beside the repository";
+  }
+  LogData log;
+  ASSERT_EQ(readBag(bag, InputOptions(), &log), "");
+  EXPECT_EQ(log.scans.size(), 13631u);
+  EXPECT_EQ(log.scans_out_of_time_order, 6) << "the log's stamps go backwards 6 times";
+  for (size_t i = 1; i < log.scans.size(); ++i) ASSERT_LT(log.scans[i - 1].seq, log.scans[i].seq);
+  EXPECT_TRUE(log.laser_pose_found);
+  EXPECT_GT(log.duration(), 2600.0);
+  EXPECT_LT(log.odometry_gaps, 20);
+}
+
+}  // namespace
+}  // namespace ekf_slam

@@ -1,0 +1,135 @@
+#include "ekf_slam_ros/offline/slam_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <limits>
+
+#include "ekf_slam_ros/offline/yaml_binder.h"
+
+namespace ekf_slam {
+namespace {
+
+constexpr double kHuge = std::numeric_limits<double>::max();
+
+void bindFeatures(YamlBinder b, FeatureOptions* f) {
+  b.number("range_sigma", &f->range_sigma, 1e-6, 10.0);
+  b.number("bearing_sigma", &f->bearing_sigma, 0.0, 1.0);
+  b.number("cluster_threshold", &f->cluster_threshold, 1e-3, 10.0);
+  b.number("cluster_incidence_angle", &f->cluster_incidence_angle, 0.0, kPi / 2);
+  b.integer("cluster_max_invalid_beams", &f->cluster_max_invalid_beams, 0, 1000);
+  b.number("split_threshold", &f->split_threshold, 1e-4, 10.0);
+  b.number("merge_chi2", &f->merge_chi2, 0.0, 1e6);
+  b.integer("min_line_points", &f->min_line_points, 2, 100000);
+  b.number("min_line_length", &f->min_line_length, 0.0, 100.0);
+  b.integer("break_guard_points", &f->break_guard_points, 0, 100);
+  b.integer("end_trim_points", &f->end_trim_points, 0, 100);
+  b.number("corner_min_angle", &f->corner_min_angle, 0.0, kPi / 2);
+  b.number("corner_max_distance", &f->corner_max_distance, 0.0, 10.0);
+  b.number("endpoint_max_gap", &f->endpoint_max_gap, 0.0, 10.0);
+  b.rejectUnknownKeys();
+}
+
+void bindFilter(YamlBinder b, FilterOptions* f, bool* laser_pose_given) {
+  std::vector<double> laser;
+  b.numbers("laser_pose", &laser, 3);
+  if (!laser.empty()) {
+    f->laser_pose = Pose2(laser[0], laser[1], laser[2]);
+    *laser_pose_given = true;
+  }
+  b.number("max_step_translation", &f->max_step_translation, 1e-6, kHuge);
+  b.number("max_step_rotation", &f->max_step_rotation, 1e-6, 2 * kPi);
+  b.integer("tentative_max_age", &f->tentative_max_age, 0L, 1000000L);
+  YamlBinder noise = b.child("motion_noise");
+  MotionNoiseOptions& n = f->motion_noise;
+  noise.number("rot_per_rot", &n.rot_per_rot, 0.0, kHuge);
+  noise.number("rot_per_trans", &n.rot_per_trans, 0.0, kHuge);
+  noise.number("trans_per_trans", &n.trans_per_trans, 0.0, kHuge);
+  noise.number("trans_per_rot", &n.trans_per_rot, 0.0, kHuge);
+  noise.number("min_rot_sigma", &n.min_rot_sigma, 0.0, kHuge);
+  noise.number("min_trans_sigma", &n.min_trans_sigma, 0.0, kHuge);
+  noise.rejectUnknownKeys();
+  b.rejectUnknownKeys();
+}
+
+void bindAssociation(YamlBinder b, AssociationOptions* a) {
+  std::string method = a->method == AssociationMethod::kJointCompatibility ? "jcbb" : "nn";
+  b.text("method", &method, {"nn", "jcbb"});
+  a->method = method == "jcbb" ? AssociationMethod::kJointCompatibility
+                               : AssociationMethod::kNearestNeighbour;
+  b.number("gate_probability", &a->gate_probability, 1e-9, 1.0 - 1e-12);
+  b.number("new_landmark_probability", &a->new_landmark_probability, 1e-9, 1.0 - 1e-12);
+  b.integer("jcbb_max_nodes", &a->jcbb_max_nodes, 1, 100000000);
+  b.rejectUnknownKeys();
+}
+
+void bindPipeline(YamlBinder b, PipelineOptions* p) {
+  b.number("min_travel_distance", &p->min_travel_distance, 0.0, kHuge);
+  b.number("min_travel_angle", &p->min_travel_angle, 0.0, 2 * kPi);
+  b.number("max_landmark_range", &p->max_landmark_range, 1e-3, kHuge);
+  std::vector<double> sigma;
+  b.numbers("initial_pose_sigma", &sigma, 3);
+  if (!sigma.empty()) {
+    p->initial_pose_covariance =
+        Vector3(sigma[0] * sigma[0], sigma[1] * sigma[1], sigma[2] * sigma[2]).asDiagonal();
+  }
+  b.rejectUnknownKeys();
+}
+
+void bindMap(YamlBinder b, OccupancyGridOptions* m) {
+  b.number("resolution", &m->resolution, 1e-3, 10.0);
+  b.number("hit_probability", &m->hit_probability, 0.5, 1.0);
+  b.number("miss_probability", &m->miss_probability, 0.0, 0.5);
+  b.number("clamp_log_odds", &m->clamp_log_odds, 1e-3, 100.0);
+  b.number("max_insert_range", &m->max_insert_range, 1e-3, kHuge);
+  b.number("no_return_free_range", &m->no_return_free_range, 0.0, kHuge);
+  b.rejectUnknownKeys();
+}
+
+void bindInput(YamlBinder b, InputOptions* in) {
+  b.text("scan_topic", &in->scan_topic);
+  b.text("odom_topic", &in->odom_topic);
+  b.text("odometry_source", &in->odometry_source, {"odom", "tf"});
+  b.text("odom_frame", &in->odom_frame);
+  b.text("base_frame", &in->base_frame);
+  b.number("max_odometry_gap", &in->max_odometry_gap, 1e-6, kHuge);
+  b.rejectUnknownKeys();
+}
+
+}  // namespace
+
+std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
+  auto errors = std::make_shared<std::vector<std::string>>();
+  YamlBinder top(root, "", errors);
+  SlamConfig c = *config;
+  bindFeatures(top.child("features"), &c.pipeline.features);
+  bindFilter(top.child("filter"), &c.pipeline.filter, &c.laser_pose_given);
+  bindAssociation(top.child("association"), &c.pipeline.association);
+  bindPipeline(top.child("pipeline"), &c.pipeline);
+  bindMap(top.child("map"), &c.map);
+  bindInput(top.child("input"), &c.input);
+  top.rejectUnknownKeys();
+  if (errors->empty()) {
+    // Cross-field checks of the components themselves.
+    const std::string pipeline = c.pipeline.validate();
+    if (!pipeline.empty()) errors->push_back(pipeline);
+    const std::string map = c.map.validate();
+    if (!map.empty()) errors->push_back("map: " + map);
+  }
+  if (!errors->empty()) {
+    std::string all;
+    for (const std::string& e : *errors) all += (all.empty() ? "" : "\n") + e;
+    return all;
+  }
+  *config = c;
+  return "";
+}
+
+std::string loadSlamConfigFile(const std::string& path, SlamConfig* config) {
+  try {
+    return loadSlamConfig(YAML::LoadFile(path), config);
+  } catch (const YAML::Exception& e) {
+    return path + ": " + e.what();
+  }
+}
+
+}  // namespace ekf_slam

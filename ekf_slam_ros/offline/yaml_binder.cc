@@ -1,0 +1,133 @@
+#include "ekf_slam_ros/offline/yaml_binder.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace ekf_slam {
+
+YamlBinder::YamlBinder(const YAML::Node& node, const std::string& path,
+                       std::shared_ptr<std::vector<std::string>> errors)
+    : node_(node), path_(path), errors_(std::move(errors)) {
+  if (node_ && !node_.IsNull() && !node_.IsMap()) {
+    error((path_.empty() ? std::string("document") : path_) + ": must be a mapping of keys");
+    node_ = YAML::Node();
+  }
+}
+
+std::string YamlBinder::keyPath(const char* key) const {
+  return path_.empty() ? std::string(key) : path_ + "." + key;
+}
+
+void YamlBinder::error(const std::string& message) { errors_->push_back(message); }
+
+void YamlBinder::number(const char* key, double* value, double min, double max) {
+  known_.insert(key);
+  if (!node_ || !node_[key]) return;
+  try {
+    const double v = node_[key].as<double>();
+    if (!std::isfinite(v) || v < min || v > max) {
+      std::ostringstream m;
+      m << keyPath(key) << ": must be in [" << min << ", " << max << "], got " << v;
+      error(m.str());
+      return;
+    }
+    *value = v;
+  } catch (const YAML::Exception&) {
+    error(keyPath(key) + ": must be a number");
+  }
+}
+
+void YamlBinder::integer(const char* key, int* value, int min, int max) {
+  long v = *value;
+  integer(key, &v, min, max);
+  *value = static_cast<int>(v);
+}
+
+void YamlBinder::integer(const char* key, long* value, long min, long max) {
+  known_.insert(key);
+  if (!node_ || !node_[key]) return;
+  try {
+    const long v = node_[key].as<long>();
+    if (v < min || v > max) {
+      error(keyPath(key) + ": must be in [" + std::to_string(min) + ", " + std::to_string(max) +
+            "], got " + std::to_string(v));
+      return;
+    }
+    *value = v;
+  } catch (const YAML::Exception&) {
+    error(keyPath(key) + ": must be an integer");
+  }
+}
+
+void YamlBinder::boolean(const char* key, bool* value) {
+  known_.insert(key);
+  if (!node_ || !node_[key]) return;
+  try {
+    *value = node_[key].as<bool>();
+  } catch (const YAML::Exception&) {
+    error(keyPath(key) + ": must be true or false");
+  }
+}
+
+void YamlBinder::text(const char* key, std::string* value,
+                      const std::vector<std::string>& allowed) {
+  known_.insert(key);
+  if (!node_ || !node_[key]) return;
+  try {
+    const std::string v = node_[key].as<std::string>();
+    if (!allowed.empty()) {
+      bool ok = false;
+      std::string list;
+      for (const std::string& a : allowed) {
+        ok = ok || a == v;
+        list += (list.empty() ? "" : ", ") + a;
+      }
+      if (!ok) {
+        error(keyPath(key) + ": must be one of " + list + ", got '" + v + "'");
+        return;
+      }
+    }
+    *value = v;
+  } catch (const YAML::Exception&) {
+    error(keyPath(key) + ": must be a string");
+  }
+}
+
+void YamlBinder::numbers(const char* key, std::vector<double>* values, size_t count) {
+  known_.insert(key);
+  if (!node_ || !node_[key]) return;
+  const YAML::Node list = node_[key];
+  if (!list.IsSequence() || list.size() != count) {
+    error(keyPath(key) + ": must be a list of " + std::to_string(count) + " numbers");
+    return;
+  }
+  std::vector<double> out;
+  try {
+    for (const YAML::Node& item : list) out.push_back(item.as<double>());
+  } catch (const YAML::Exception&) {
+    error(keyPath(key) + ": must be a list of " + std::to_string(count) + " numbers");
+    return;
+  }
+  for (double v : out) {
+    if (!std::isfinite(v)) {
+      error(keyPath(key) + ": values must be finite");
+      return;
+    }
+  }
+  *values = out;
+}
+
+YamlBinder YamlBinder::child(const char* key) {
+  known_.insert(key);
+  return YamlBinder(node_ ? node_[key] : YAML::Node(), keyPath(key), errors_);
+}
+
+void YamlBinder::rejectUnknownKeys() {
+  if (!node_ || !node_.IsMap()) return;
+  for (const auto& entry : node_) {
+    const std::string key = entry.first.as<std::string>();
+    if (!known_.count(key)) error(keyPath(key.c_str()) + ": unknown key");
+  }
+}
+
+}  // namespace ekf_slam

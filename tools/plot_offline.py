@@ -1,0 +1,118 @@
+#!/usr/bin/python3
+"""Figures of an ekf_slam_offline run, in the manner of the thesis's Chapter 5.
+
+usage: plot_offline.py DIR
+
+Reads DIR/map*.pgm + .yaml, DIR/trajectory_*.txt, DIR/landmarks.yaml and
+DIR/first_last_scans.txt; writes
+  DIR/fig_map_slam_vs_odometry.png   the grid and path from SLAM vs from odometry
+  DIR/fig_first_last_scans.png       first and last scan in each frame (Fig. 5.7)
+  DIR/fig_smoothing.png              the grid before and after smoothing (Fig. 5.11)
+"""
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+
+
+def read_pgm(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    # Header: magic, optional comments, width height, maxval, then bytes.
+    fields, pos = [], 0
+    while len(fields) < 4:
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        if data[pos:pos + 1] == b"#":
+            pos = data.index(b"\n", pos) + 1
+            continue
+        end = pos
+        while not data[end:end + 1].isspace():
+            end += 1
+        fields.append(data[pos:end])
+        pos = end
+    pos += 1
+    width, height = int(fields[1]), int(fields[2])
+    return np.frombuffer(data[pos:pos + width * height], dtype=np.uint8).reshape(height, width)
+
+
+def show_map(ax, out_dir, base, title):
+    meta = yaml.safe_load(open(os.path.join(out_dir, base + ".yaml")))
+    image = read_pgm(os.path.join(out_dir, meta["image"]))
+    res = float(meta["resolution"])
+    x0, y0 = meta["origin"][0], meta["origin"][1]
+    h, w = image.shape
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255, origin="upper",
+              extent=[x0, x0 + w * res, y0, y0 + h * res])
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
+def trajectory(out_dir, name):
+    return np.atleast_2d(np.loadtxt(os.path.join(out_dir, "trajectory_%s.txt" % name)))
+
+
+def crop_to(ax, traj, margin=5.0):
+    ax.set_xlim(traj[:, 1].min() - margin, traj[:, 1].max() + margin)
+    ax.set_ylim(traj[:, 2].min() - margin, traj[:, 2].max() + margin)
+
+
+def main(out_dir):
+    smoothed = trajectory(out_dir, "smoothed")
+    filtered = trajectory(out_dir, "filtered")
+    odometry = trajectory(out_dir, "odometry")
+
+    fig, axes = plt.subplots(1, 2, figsize=(14, 7))
+    show_map(axes[0], out_dir, "map", "EKF-SLAM (smoothed) map and path")
+    axes[0].plot(smoothed[:, 1], smoothed[:, 2], color="tab:blue", lw=0.6)
+    landmarks = yaml.safe_load(open(os.path.join(out_dir, "landmarks.yaml")))["landmarks"] or []
+    if landmarks:
+        axes[0].scatter([l["x"] for l in landmarks], [l["y"] for l in landmarks], s=4,
+                        color="tab:red", label="landmarks")
+        axes[0].legend(loc="upper right", fontsize=8)
+    crop_to(axes[0], smoothed)
+    show_map(axes[1], out_dir, "map_odometry", "odometry only")
+    axes[1].plot(odometry[:, 1], odometry[:, 2], color="tab:red", lw=0.6)
+    crop_to(axes[1], odometry)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "fig_map_slam_vs_odometry.png"), dpi=100)
+    plt.close(fig)
+
+    rows = [line.split() for line in open(os.path.join(out_dir, "first_last_scans.txt"))
+            if not line.startswith("#")]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 6))
+    for ax, frame in zip(axes, ["odometry", "slam"]):
+        for which, color in [("first", "tab:blue"), ("last", "tab:red")]:
+            pts = np.array([[float(r[2]), float(r[3])] for r in rows
+                            if r[0] == frame and r[1] == which] or np.zeros((0, 2)))
+            if len(pts):
+                ax.scatter(pts[:, 0], pts[:, 1], s=2, color=color, label="%s scan" % which)
+        ax.set_title("first and last scan placed with %s poses" % frame, fontsize=10)
+        ax.set_aspect("equal")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "fig_first_last_scans.png"), dpi=100)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 2, figsize=(14, 7))
+    show_map(axes[0], out_dir, "map_filtered", "grid from the filtered poses")
+    crop_to(axes[0], filtered)
+    show_map(axes[1], out_dir, "map", "grid from the smoothed poses")
+    crop_to(axes[1], smoothed)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "fig_smoothing.png"), dpi=100)
+    plt.close(fig)
+    print("figures written to " + out_dir)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])
