@@ -77,10 +77,13 @@ void P3dxEmulator::step(double now) {
 
   double dt = std::max(0.0, now - last_step_);  // time going backwards: no motion
   last_step_ = std::max(last_step_, now);
-  while (dt > 0.0) {
+  // A wheel stall is reported when an increment of this step was blocked.
+  if (dt > 1e-9) blocked_ = false;
+  while (dt > 1e-9) {
     const double slice = std::min(dt, kMaxSubstep);
     integrate(slice);
     dt -= slice;
+    stalled_now_ = blocked_;
   }
 
   if (state_ == State::kOpen && now >= next_sip_) {
@@ -111,16 +114,12 @@ void P3dxEmulator::integrate(double dt) {
 
   const double distance = velocity_ * dt;
   const double turn = rotational_velocity_ * dt;
-  if (distance == 0.0 && turn == 0.0) {
-    stalled_now_ = false;
-    return;
-  }
+  if (distance == 0.0 && turn == 0.0) return;
   const Pose2 proposed = ekf_slam::compose(true_pose_, arc(distance, turn));
   if (options_.faults.stalled || (motion_hook_ && !motion_hook_(true_pose_, proposed))) {
-    stalled_now_ = true;
+    blocked_ = true;
     return;  // the wheels do not turn: neither the pose nor the encoders change
   }
-  stalled_now_ = false;
   true_pose_ = proposed;
 
   double left = distance - turn * track / 2.0;

@@ -121,7 +121,8 @@ class P3dxEmulator {
   double target_left_ = 0.0, target_right_ = 0.0;  // m/s (VEL2)
   bool motors_enabled_ = false;
   bool sonar_enabled_ = true;
-  bool stalled_now_ = false;
+  bool stalled_now_ = false;  // reported in SIPs
+  bool blocked_ = false;      // an increment of the current step was blocked
   double last_step_ = -1.0;
   double last_command_ = 0.0;
   double next_sip_ = 0.0;
