@@ -13,19 +13,18 @@
 #include <string>
 #include <thread>
 
+#include "sick_lms200_driver/node/laser_scan_conversion.h"
 #include "sick_lms200_driver/protocol/scanner_link.h"
 
 namespace {
 
 using sick_lms200::LinkOptions;
 
-constexpr double degToRad(double degrees) { return degrees * M_PI / 180.0; }
 using sick_lms200::LinkStats;
 
 struct NodeOptions {
   LinkOptions link;
-  std::string frame_id = "laser";
-  bool inverted = false;
+  sick_lms200::ScanMessageOptions message;
 };
 
 // Reads the private parameters; false (with a message naming the key) when
@@ -65,9 +64,9 @@ bool loadOptions(const ros::NodeHandle& pnh, NodeOptions* options, std::string* 
   }
   link.session.units =
       units == "mm" ? sick_lms200::Units::kMillimetres : sick_lms200::Units::kCentimetres;
-  pnh.param("frame_id", options->frame_id, options->frame_id);
+  pnh.param("frame_id", options->message.frame_id, options->message.frame_id);
   pnh.param("time_offset", link.time_offset, link.time_offset);
-  pnh.param("inverted", options->inverted, options->inverted);
+  pnh.param("inverted", options->message.inverted, options->message.inverted);
   pnh.param("reconnect_delay", link.reconnect_delay, link.reconnect_delay);
   pnh.param("data_timeout", link.data_timeout, link.data_timeout);
   if (!std::isfinite(link.time_offset) || std::abs(link.time_offset) > 1.0) {
@@ -78,40 +77,12 @@ bool loadOptions(const ros::NodeHandle& pnh, NodeOptions* options, std::string* 
     *error = "reconnect_delay and data_timeout must be positive (s)";
     return false;
   }
-  if (options->frame_id.empty()) {
+  if (options->message.frame_id.empty()) {
     *error = "frame_id must not be empty";
     return false;
   }
   *error = sick_lms200::validateSessionOptions(link.session);
   return error->empty();
-}
-
-sensor_msgs::LaserScan toLaserScan(const sick_lms200::LaserScanData& scan,
-                                   const NodeOptions& options) {
-  sensor_msgs::LaserScan msg;
-  msg.header.frame_id = options.frame_id;
-  const double half_angle = degToRad(scan.angle_deg / 2.0);
-  msg.angle_min = static_cast<float>(-half_angle);
-  msg.angle_max = static_cast<float>(half_angle);
-  msg.angle_increment = static_cast<float>(degToRad(scan.resolution_centideg / 100.0));
-  msg.scan_time = static_cast<float>(
-      1.0 / sick_lms200::expectedScanRate(scan.angle_deg, scan.resolution_centideg,
-                                          options.link.session.baud));
-  msg.range_min = 0.01f;
-  msg.range_max = static_cast<float>(sick_lms200::maxRange(scan.values.units));
-  msg.ranges = scan.values.ranges;
-  if (!options.inverted) {
-    msg.header.stamp = ros::Time(scan.first_beam_time);
-    msg.time_increment = static_cast<float>(scan.time_increment);
-  } else {
-    // Mounted upside down: the sensor's first beam is on the left of an
-    // upright laser frame. Reverse the array so angles still increase; the
-    // first element is now the last beam measured.
-    std::reverse(msg.ranges.begin(), msg.ranges.end());
-    msg.header.stamp = ros::Time(scan.first_beam_time + scan.sweep_time);
-    msg.time_increment = static_cast<float>(-scan.time_increment);
-  }
-  return msg;
 }
 
 }  // namespace
@@ -131,7 +102,7 @@ int main(int argc, char** argv) {
   sick_lms200::ScannerLink link(
       options.link, [] { return ros::Time::now().toSec(); },
       [&](const sick_lms200::LaserScanData& scan) {
-        scan_pub.publish(toLaserScan(scan, options));
+        scan_pub.publish(sick_lms200::toLaserScan(scan, options.message));
       });
 
   diagnostic_updater::Updater updater;

@@ -202,6 +202,7 @@ void ScannerLink::handleTelegram(const DecoderEvent& event, double read_time, ui
       (options_.filter_stamps ? stamp_filter_.filter(raw_stamp) : raw_stamp) + options_.time_offset;
   scan.angle_deg = angle;
   scan.resolution_centideg = res;
+  scan.baud = baud;
   last_scan_ = Clock::now();
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -51,6 +51,7 @@ struct LaserScanData {
   double time_increment = 0.0;   // s, see beamTimeIncrement()
   int angle_deg = 180;
   int resolution_centideg = 100;
+  int baud = 9600;        // line speed the scan arrived at
   MeasuredValues values;  // ranges in metres (REP-117) and raw words
 };
 
