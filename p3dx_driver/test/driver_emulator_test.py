@@ -15,8 +15,9 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
-from std_srvs.srv import SetBool
+from std_srvs.srv import SetBool, Trigger
 
 POSITION_TOLERANCE = 0.01  # m
 ANGLE_TOLERANCE = math.radians(1.0)
@@ -39,10 +40,14 @@ class Listener:
         self.odom = []
         self.emulator_odometry = None
         self.motors_enabled = None
+        self.stall = None
+        self.sonar = None
         self.link_status = None
         rospy.Subscriber("odom", Odometry, self.on_odom, queue_size=100)
         rospy.Subscriber("p3dx_emulator/odometry", Odometry, self.on_emulator, queue_size=10)
         rospy.Subscriber("motors_enabled", Bool, self.on_motors, queue_size=1)
+        rospy.Subscriber("stall", Bool, self.on_stall, queue_size=1)
+        rospy.Subscriber("sonar/3", Range, self.on_sonar, queue_size=1)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=10)
 
     def on_odom(self, message):
@@ -55,6 +60,12 @@ class Listener:
 
     def on_motors(self, message):
         self.motors_enabled = message.data
+
+    def on_stall(self, message):
+        self.stall = message.data
+
+    def on_sonar(self, message):
+        self.sonar = message
 
     def on_diagnostics(self, message):
         for status in message.status:
@@ -128,6 +139,8 @@ class DriverEmulatorTest(unittest.TestCase):
         dx = odom.pose.pose.position.x - emulator.pose.pose.position.x
         dy = odom.pose.pose.position.y - emulator.pose.pose.position.y
         dyaw = wrap(yaw_of(odom) - yaw_of(emulator))
+        rospy.loginfo("%s: odometry vs emulator %.5f m, %.4f deg", where, math.hypot(dx, dy),
+                      math.degrees(dyaw))
         self.assertLess(math.hypot(dx, dy), POSITION_TOLERANCE,
                         "%s: position differs by %.4f m" % (where, math.hypot(dx, dy)))
         self.assertLess(abs(dyaw), ANGLE_TOLERANCE,
@@ -171,6 +184,7 @@ class BasicTest(DriverEmulatorTest):
         stopped = wait_for(lambda: self.listener.emulator_odometry.twist.twist.linear.x == 0.0, 5.0)
         elapsed = time.monotonic() - last_command
         self.assertTrue(stopped, "robot still moving 5 s after the last cmd_vel")
+        rospy.loginfo("robot stopped %.2f s after the last cmd_vel", elapsed)
         # cmd_vel_timeout 0.5 s + deceleration 0.3 m/s at 1 m/s² + latency,
         # well before the robot's own 2 s watchdog.
         self.assertLess(elapsed, 1.5, "robot stopped only after %.2f s" % elapsed)
@@ -207,6 +221,43 @@ class BasicTest(DriverEmulatorTest):
         self.assertIn("cmd_vel_timeuot", result.stdout + result.stderr)
 
 
+    def test_6_stall_is_reported(self):
+        set_stalled = rospy.ServiceProxy("p3dx_emulator/set_stalled", SetBool)
+        set_stalled(True)
+        try:
+            # Keep pushing against the blocked wheels while diagnostics (1 Hz) catch up.
+            deadline = time.monotonic() + 5.0
+            while time.monotonic() < deadline and not (
+                    self.listener.stall and self.listener.diagnostic_value("stalled") == "True"):
+                self.send(0.2, 0.0)
+                time.sleep(0.05)
+            self.send(0.0, 0.0)
+            self.assertTrue(self.listener.stall, "stall not published while the wheels are blocked")
+            self.assertEqual(self.listener.diagnostic_value("stalled"), "True",
+                             "diagnostics do not show the stall")
+        finally:
+            set_stalled(False)
+        self.wait_until_still()
+        self.assertTrue(wait_for(lambda: self.listener.stall is False, 5.0))
+
+    def test_7_motor_and_odometry_services(self):
+        enable = rospy.ServiceProxy("p3dx_driver/enable_motors", SetBool)
+        self.assertTrue(enable(False).success)
+        self.assertTrue(wait_for(lambda: self.listener.motors_enabled is False, 5.0),
+                        "motors_enabled did not become false")
+        self.assertTrue(enable(True).success)
+        self.assertTrue(wait_for(lambda: self.listener.motors_enabled is True, 5.0))
+        _, odom = self.listener.last_odom()
+        self.assertGreater(abs(odom.pose.pose.position.x) + abs(odom.pose.pose.position.y), 0.1)
+        reset = rospy.ServiceProxy("p3dx_driver/reset_odometry", Trigger)
+        self.assertTrue(reset().success)
+        called = time.monotonic()
+        self.assertTrue(wait_for(lambda: self.listener.last_odom()[0] > called + 0.05, 5.0))
+        _, odom = self.listener.last_odom()
+        self.assertLess(math.hypot(odom.pose.pose.position.x, odom.pose.pose.position.y), 1e-3)
+        self.assertLess(abs(yaw_of(odom)), 1e-3)
+
+
 class CorruptionTest(DriverEmulatorTest):
     def test_corrupt_packets_counted_and_skipped(self):
         first = len(self.listener.odom)
@@ -231,6 +282,10 @@ class CorruptionTest(DriverEmulatorTest):
         rospy.loginfo("checksum errors %d of %d packets", errors, packets)
         self.assertGreater(errors, 0, "no checksum error counted at a 5 % corruption rate")
         self.assertLess(errors, 0.15 * packets, "more errors counted than packets corrupted")
+        # Sonar is on in this test: the emulator reports 5 m (its maximum).
+        self.assertIsNotNone(self.listener.sonar, "no sonar/3 message")
+        self.assertEqual(self.listener.sonar.header.frame_id, "sonar_3")
+        self.assertTrue(math.isinf(self.listener.sonar.range))
 
 
 if __name__ == "__main__":
