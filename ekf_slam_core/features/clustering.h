@@ -15,8 +15,11 @@ struct ScanPoint {
   int beam = 0;          // index into Scan::ranges
   double range = 0.0;    // m
   double bearing = 0.0;  // rad, laser frame
-  Vector2 xy;            // m, laser frame: range · (cos bearing, sin bearing)
+  Vector2 direction;     // (cos bearing, sin bearing), computed once per beam
+  Vector2 xy;            // m, laser frame: range · direction
 };
+
+ScanPoint makeScanPoint(int beam, double range, double bearing);
 
 // Inclusive index range [first, last] into a ScanPoint vector.
 struct IndexSpan {

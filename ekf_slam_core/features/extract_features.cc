@@ -40,8 +40,11 @@ struct FittedPiece {
 // the residual n·x − p has variance σ_r² cos²(φ − θ) + r² σ_φ² sin²(φ − θ)
 // from the beam plus, from the line, [−1, d·x] Σ [−1, d·x]ᵀ.
 bool offLine(const LineFit& line, const ScanPoint& point, const FeatureOptions& options) {
-  const double residual = line.normal().dot(point.xy) - line.p;
-  const double c = std::cos(point.bearing - line.theta), s = std::sin(point.bearing - line.theta);
+  // cos and sin of (φ − θ) from the unit vectors, no trig per reading.
+  const Vector2 n = line.normal();
+  const double c = point.direction.dot(n);
+  const double s = point.direction.y() * n.x() - point.direction.x() * n.y();
+  const double residual = n.dot(point.xy) - line.p;
   const double along = line.direction().dot(point.xy);
   const double variance =
       options.range_sigma * options.range_sigma * c * c +
@@ -116,7 +119,7 @@ PointFeature segmentEnd(const Scan& scan, const std::vector<ScanPoint>& points,
   for (int i = 0; i < piece.span.size(); ++i) {
     Matrix2 J = J_end_line * piece.J_line_beam[i];
     if (piece.span.first + i == extreme) {
-      const double cb = std::cos(q_point.bearing), sb = std::sin(q_point.bearing);
+      const double cb = q_point.direction.x(), sb = q_point.direction.y();
       Matrix2 J_q_polar;
       J_q_polar << cb, -q_point.range * sb, sb, q_point.range * cb;
       J += J_end_q * J_q_polar;

@@ -12,8 +12,12 @@ Vector2 LineFit::project(const Vector2& point) const {
   return point - (n.dot(point) - p) * n;
 }
 
-bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double range_sigma,
-             double bearing_sigma, LineFit* fit, std::vector<Matrix2>* J_per_point) {
+namespace {
+
+// The fit; the covariance loop runs only when `with_covariance`.
+bool fit(const std::vector<ScanPoint>& points, int first, int last, double range_sigma,
+         double bearing_sigma, bool with_covariance, LineFit* out,
+         std::vector<Matrix2>* J_per_point) {
   const int n = last - first + 1;
   if (n < 2 || first < 0 || last >= static_cast<int>(points.size())) return false;
   Vector2 centroid = Vector2::Zero();
@@ -27,30 +31,26 @@ bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double r
     sxy += q.x() * q.y();
   }
   // Sum of squared distances along θ: ½(Sxx+Syy) + ½(Sxx−Syy)cos2θ + Sxy sin2θ,
-  // smallest for 2θ = atan2(−2Sxy, Syy − Sxx).
-  // Spread below rounding noise of the coordinates (coincident points) or
-  // without a dominant direction has no unique line.
+  // smallest for 2θ = atan2(−2Sxy, Syy − Sxx). Spread below rounding noise
+  // of the coordinates (coincident points) or without a dominant direction
+  // has no unique line.
   const double spread = sxx + syy;
   const double anisotropy = std::hypot(syy - sxx, 2.0 * sxy);
   if (!(spread > 1e-20 * n * (1.0 + centroid.squaredNorm())) || !(anisotropy > 1e-12 * spread)) {
     return false;
   }
   double theta = 0.5 * std::atan2(-2.0 * sxy, syy - sxx);
-  double c = std::cos(theta), s = std::sin(theta);
+  // cos θ, sin θ from cos 2θ (half-angle; θ in [−π/2, π/2] so cos θ >= 0).
+  const double cos_2theta = (syy - sxx) / anisotropy;
+  const double c = std::sqrt(std::max(0.0, 0.5 * (1.0 + cos_2theta)));
+  const double s = std::copysign(std::sqrt(std::max(0.0, 0.5 * (1.0 - cos_2theta))), theta);
   double p = centroid.x() * c + centroid.y() * s;
 
   // Residuals d_i (along the normal) and along-line coordinates t_i, both
   // relative to the centroid; D = Σt² − Σd² > 0 is ∂F/∂θ of the normal
-  // equation F(θ) = Σ d_i t_i = 0.
-  double sum_t2 = 0.0, sum_d2 = 0.0, max_d = 0.0;
-  for (int i = first; i <= last; ++i) {
-    const Vector2 q = points[i].xy - centroid;
-    const double d = q.x() * c + q.y() * s;
-    const double t = -q.x() * s + q.y() * c;
-    sum_t2 += t * t;
-    sum_d2 += d * d;
-    max_d = std::max(max_d, std::abs(d));
-  }
+  // equation F(θ) = Σ d_i t_i = 0 (= the anisotropy, in closed form).
+  const double sum_d2 = c * c * sxx + 2.0 * c * s * sxy + s * s * syy;
+  const double sum_t2 = spread - sum_d2;
   const double D = sum_t2 - sum_d2;
   if (!(D > 0.0)) return false;
 
@@ -60,10 +60,13 @@ bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double r
   const double var_phi = bearing_sigma * bearing_sigma;
   Matrix2 covariance = Matrix2::Zero();
   if (J_per_point) J_per_point->resize(n);
+  double max_d = 0.0;
   for (int i = first; i <= last; ++i) {
     const ScanPoint& pt = points[i];
     const Vector2 q = pt.xy - centroid;
     const double d = q.x() * c + q.y() * s;
+    max_d = std::max(max_d, std::abs(d));
+    if (!with_covariance) continue;
     const double t = -q.x() * s + q.y() * c;
     // ∂(p, θ)/∂(x_i, y_i)
     Matrix2 J_line_xy;
@@ -72,7 +75,7 @@ bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double r
     J_line_xy << sign * (c / n + lever * dtheta_dx), sign * (s / n + lever * dtheta_dy), dtheta_dx,
         dtheta_dy;
     // ∂(x_i, y_i)/∂(r_i, φ_i)
-    const double cb = std::cos(pt.bearing), sb = std::sin(pt.bearing);
+    const double cb = pt.direction.x(), sb = pt.direction.y();
     Matrix2 J_xy_polar;
     J_xy_polar << cb, -pt.range * sb, sb, pt.range * cb;
     const Matrix2 J = J_line_xy * J_xy_polar;
@@ -84,14 +87,25 @@ bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double r
     p = -p;
     theta += kPi;
   }
-  fit->p = p;
-  fit->theta = wrapAngle(theta);
-  fit->covariance = covariance;
-  fit->centroid = centroid;
-  fit->rms_residual = std::sqrt(sum_d2 / n);
-  fit->max_residual = max_d;
-  fit->num_points = n;
+  out->p = p;
+  out->theta = wrapAngle(theta);
+  out->covariance = covariance;
+  out->centroid = centroid;
+  out->rms_residual = std::sqrt(std::max(0.0, sum_d2) / n);
+  out->max_residual = max_d;
+  out->num_points = n;
   return true;
+}
+
+}  // namespace
+
+bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double range_sigma,
+             double bearing_sigma, LineFit* out, std::vector<Matrix2>* J_per_point) {
+  return fit(points, first, last, range_sigma, bearing_sigma, true, out, J_per_point);
+}
+
+bool fitLineGeometry(const std::vector<ScanPoint>& points, int first, int last, LineFit* out) {
+  return fit(points, first, last, 0.0, 0.0, false, out, nullptr);
 }
 
 bool intersectLines(double p1, double theta1, double p2, double theta2, Vector2* point,

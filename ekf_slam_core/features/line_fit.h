@@ -39,6 +39,10 @@ struct LineFit {
 bool fitLine(const std::vector<ScanPoint>& points, int first, int last, double range_sigma,
              double bearing_sigma, LineFit* fit, std::vector<Matrix2>* J_per_point = nullptr);
 
+// The same fit without the covariance (left zero): p, θ, centroid and
+// residuals only, for split-and-merge decisions.
+bool fitLineGeometry(const std::vector<ScanPoint>& points, int first, int last, LineFit* fit);
+
 // Intersection of the lines (p1, θ1) and (p2, θ2). J_out_line1/2 =
 // ∂point/∂(p_k, θ_k). Returns false when the lines are (near) parallel,
 // |sin(θ2 − θ1)| < 1e-6.

@@ -23,11 +23,7 @@ using testing::numericalJacobian;
 std::vector<ScanPoint> pointsFromPolar(const VectorXd& polar) {
   std::vector<ScanPoint> points(polar.size() / 2);
   for (size_t i = 0; i < points.size(); ++i) {
-    points[i].beam = static_cast<int>(i);
-    points[i].range = polar(2 * i);
-    points[i].bearing = polar(2 * i + 1);
-    points[i].xy =
-        points[i].range * Vector2(std::cos(points[i].bearing), std::sin(points[i].bearing));
+    points[i] = makeScanPoint(static_cast<int>(i), polar(2 * i), polar(2 * i + 1));
   }
   return points;
 }
@@ -171,11 +167,8 @@ TEST(LineFit, CovarianceIsConsistentOverNoisyDraws) {
     for (int i = 0; i < beams; ++i) {
       const double reported = -0.6 + 0.02 * i;
       const double actual = reported + bearing_noise(rng);  // where the beam really went
-      ScanPoint& pt = points[i];
-      pt.beam = i;
-      pt.bearing = reported;
-      pt.range = p_true / std::cos(actual - theta_true) + range_noise(rng);
-      pt.xy = pt.range * Vector2(std::cos(pt.bearing), std::sin(pt.bearing));
+      points[i] =
+          makeScanPoint(i, p_true / std::cos(actual - theta_true) + range_noise(rng), reported);
     }
     LineFit fit;
     ASSERT_TRUE(fitLine(points, 0, beams - 1, sigma_r, sigma_phi, &fit));

@@ -32,15 +32,17 @@ std::pair<int, double> farthestFromChord(const std::vector<ScanPoint>& points, i
 bool piecesAgree(const std::vector<ScanPoint>& points, const IndexSpan& a, const IndexSpan& b,
                  const FeatureOptions& options) {
   LineFit fit_a, fit_b, joined;
-  if (!fitLine(points, a.first, a.last, options.range_sigma, options.bearing_sigma, &fit_a) ||
-      !fitLine(points, b.first, b.last, options.range_sigma, options.bearing_sigma, &fit_b) ||
-      !fitLine(points, a.first, b.last, options.range_sigma, options.bearing_sigma, &joined) ||
+  if (!fitLineGeometry(points, a.first, b.last, &joined) ||
       joined.max_residual > options.split_threshold) {
     return false;
   }
   // A two-point piece has no direction of its own to compare: the residual
   // test decides.
   if (a.size() < 3 || b.size() < 3) return true;
+  if (!fitLine(points, a.first, a.last, options.range_sigma, options.bearing_sigma, &fit_a) ||
+      !fitLine(points, b.first, b.last, options.range_sigma, options.bearing_sigma, &fit_b)) {
+    return false;
+  }
   // Compare in the joined line's orientation so that a θ flip of ±π with p
   // near 0 does not look like a difference.
   const auto aligned = [&](const LineFit& f) {
