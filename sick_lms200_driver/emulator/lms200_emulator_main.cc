@@ -23,6 +23,7 @@
 #include "serial_io/pseudo_terminal.h"
 #include "sick_lms200_driver/emulator/lms200_emulator.h"
 #include "sick_lms200_driver/emulator/room.h"
+#include "sick_lms200_driver/protocol/session.h"
 
 namespace {
 
@@ -134,6 +135,14 @@ bool parse(int argc, char** argv, CommandLine* line, std::string* error) {
       *error = "unknown option " + arg;
       return false;
     }
+  }
+  sick_lms200::SessionOptions variant;
+  variant.angle_deg = line->emulator.angle_deg;
+  variant.resolution_centideg = line->emulator.resolution_centideg;
+  const std::string invalid = sick_lms200::validateSessionOptions(variant);
+  if (!invalid.empty()) {
+    *error = invalid;
+    return false;
   }
   if (line->link.empty()) {
     *error = "--link PATH is required (the symlink the driver opens, e.g. /tmp/lms200)";

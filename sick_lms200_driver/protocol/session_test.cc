@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -202,6 +203,46 @@ TEST(ScannerLink, StampsFirstBeamAndDropsCorruptedScans) {
   RecordProperty("stamp_error_p90_us", static_cast<int>(p90 * 1e6));
   EXPECT_LT(median, 0.002);
   EXPECT_LT(p90, 0.002);
+}
+
+}  // namespace
+}  // namespace sick_lms200
+
+namespace sick_lms200 {
+namespace {
+
+TEST(ScannerLink, ReinitialisesAfterTheSensorFallsSilent) {
+  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_e");
+  LinkOptions options;
+  options.port = emulator.device();
+  options.data_timeout = 0.5;
+  options.reconnect_delay = 0.2;
+  int scans = 0;
+  ScannerLink link(options, wallNow, [&](const LaserScanData&) { scans++; });
+  auto spinUntil = [&](const std::function<bool()>& done, double seconds) {
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(seconds));
+    while (!done() && std::chrono::steady_clock::now() < deadline) link.spinOnce();
+    return done();
+  };
+  ASSERT_TRUE(spinUntil([&] { return scans >= 3; }, 10.0)) << link.stats().last_error;
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    e.setSilent(true);
+    return 0;
+  });
+  ASSERT_TRUE(spinUntil([&] { return link.stats().link_losses >= 1; }, 5.0));
+  EXPECT_NE(link.stats().last_error.find("no valid scan"), std::string::npos)
+      << link.stats().last_error;
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    e.setSilent(false);
+    return 0;
+  });
+  const int before = scans;
+  ASSERT_TRUE(spinUntil([&] { return scans >= before + 3; }, 10.0)) << link.stats().last_error;
+  EXPECT_GE(link.stats().connects, 2u);
+  EXPECT_EQ(link.stats().state, LinkState::kStreaming);
+  link.shutdown();
 }
 
 }  // namespace
