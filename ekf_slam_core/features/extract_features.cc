@@ -145,7 +145,13 @@ PointFeature segmentEnd(const Scan& scan, const std::vector<ScanPoint>& points,
     const double s_end = d.dot(end.position);
     const double s_next = alongLineCrossing(line, scan.angle(neighbour));
     const double gap = std::abs(s_next - s_end);
-    if (!(gap <= options.endpoint_max_gap)) {
+    // A next reading on the line's extension (within hf) means the same wall
+    // goes on past a sparse stretch (grazing incidence): no end at all.
+    const double bearing_next = scan.angle(neighbour);
+    const Vector2 next_point =
+        scan.ranges[neighbour] * Vector2(std::cos(bearing_next), std::sin(bearing_next));
+    const bool wall_continues = std::abs(n.dot(next_point) - line.p) <= options.split_threshold;
+    if (!(gap <= options.endpoint_max_gap) || wall_continues) {
       end.context = EndpointContext::kUnresolved;
     } else {
       end.context = EndpointContext::kFrontEdge;

@@ -57,7 +57,9 @@ enum class EndpointContext {
   kNoReturn,      // the next beam is invalid (beyond range, NaN): cannot tell, not a landmark
   kScanBoundary,  // the line runs out of the field of view: not a landmark
   kUnresolved,    // the end is not pinned down: the gap to the next beam exceeds
-                  // endpoint_max_gap, or the last readings left the line (trimmed)
+                  // endpoint_max_gap, the last readings left the line (trimmed),
+                  // or the next reading lies on the line's extension (the wall
+                  // goes on beyond a sparse stretch at grazing incidence)
 };
 
 struct PointFeature {

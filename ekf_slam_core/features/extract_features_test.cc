@@ -395,6 +395,24 @@ TEST(ExtractFeatures, ExactlyCollinearPointsGiveOneLineWithFiniteCovariance) {
   }
 }
 
+// A long wall seen at grazing incidence breaks into clusters where its
+// readings thin out. The break is no object end: nothing there may become a
+// landmark.
+TEST(ExtractFeatures, GrazingWallBreaksAreNotLandmarks) {
+  PolygonWorld world;
+  world.addSegment(Vector2(0.5, 0.4), Vector2(30.0, 0.4));
+  const FeatureSet set = extractFeatures(
+      simulateScan(world, Pose2(), lms200(721, 15.0), 0, 0, nullptr), FeatureOptions());
+  ASSERT_GE(set.clusters.size(), 2u);
+  ASSERT_GE(set.lines.size(), 1u);
+  int unresolved = 0;
+  for (const PointFeature& f : set.points_of_interest) {
+    EXPECT_FALSE(f.landmark_candidate) << "at " << f.position.transpose();
+    unresolved += f.context == EndpointContext::kUnresolved ? 1 : 0;
+  }
+  EXPECT_GE(unresolved, 1);
+}
+
 TEST(ExtractFeatures, NanInTheMiddleOfAWallKeepsOneLine) {
   const Scene scene = scenes()[0];
   Scan scan = simulateScan(scene.world, scene.sensor, lms200(361), 0, 0, nullptr);
