@@ -62,30 +62,34 @@ bool fitPiece(const std::vector<ScanPoint>& points, const FeatureOptions& option
   IndexSpan& span = piece->span;
   int trimmed_first = 0, trimmed_last = 0;
   LineFit rest;
-  bool dropped = true;
-  while (dropped) {
-    dropped = false;
+  while (true) {
+    if (span.size() < options.min_line_points ||
+        !fitLine(points, span.first, span.last, options.range_sigma, options.bearing_sigma,
+                 &piece->fit, &piece->J_line_beam)) {
+      return false;
+    }
+    // Leave-one-out lines need only their geometry; the line's uncertainty
+    // at the tested reading is taken from the full fit (n vs n − 1 readings).
+    bool dropped = false;
     if (trimmed_first < options.end_trim_points && span.size() > options.min_line_points &&
-        fitLine(points, span.first + 1, span.last, options.range_sigma, options.bearing_sigma,
-                &rest) &&
-        offLine(rest, points[span.first], options)) {
-      ++span.first;
-      ++trimmed_first;
-      dropped = true;
+        fitLineGeometry(points, span.first + 1, span.last, &rest)) {
+      rest.covariance = piece->fit.covariance;
+      if (offLine(rest, points[span.first], options)) {
+        ++span.first;
+        ++trimmed_first;
+        dropped = true;
+      }
     }
     if (trimmed_last < options.end_trim_points && span.size() > options.min_line_points &&
-        fitLine(points, span.first, span.last - 1, options.range_sigma, options.bearing_sigma,
-                &rest) &&
-        offLine(rest, points[span.last], options)) {
-      --span.last;
-      ++trimmed_last;
-      dropped = true;
+        fitLineGeometry(points, span.first, span.last - 1, &rest)) {
+      rest.covariance = piece->fit.covariance;
+      if (offLine(rest, points[span.last], options)) {
+        --span.last;
+        ++trimmed_last;
+        dropped = true;
+      }
     }
-  }
-  if (span.size() < options.min_line_points ||
-      !fitLine(points, span.first, span.last, options.range_sigma, options.bearing_sigma,
-               &piece->fit, &piece->J_line_beam)) {
-    return false;
+    if (!dropped) break;
   }
   piece->trimmed_first = trimmed_first > 0;
   piece->trimmed_last = trimmed_last > 0;
