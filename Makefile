@@ -14,7 +14,7 @@ OUT   ?= $(ROOT)/output
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench format check clean
+.PHONY: all deps workspace build test demo bench benchmark format check clean
 
 all: build
 
@@ -47,6 +47,16 @@ bench: deps
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
 	@tools/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
+
+# Offline SLAM on the real datasets in ../shared/datasets, scored with the
+# relation metric; results in output/benchmark/ (summary.md).
+benchmark: deps
+	@mkdir -p $(BENCH_WS)/src
+	@if [ ! -e $(BENCH_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(BENCH_WS)/src/ekf_slam; fi
+	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
+	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
+	@tools/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
 
 format:
 	@tools/check_format.sh --fix

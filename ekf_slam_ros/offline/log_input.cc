@@ -11,6 +11,7 @@
 
 #include "ekf_slam_core/io/carmen_log.h"
 #include "ekf_slam_core/pipeline/odometry_track.h"
+#include "ekf_slam_ros/conversions/scan_conversion.h"
 
 namespace ekf_slam {
 namespace {
@@ -21,17 +22,6 @@ std::string stripSlash(const std::string& frame) {
 
 double yawOf(double x, double y, double z, double w) {
   return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
-}
-
-Scan toScan(const sensor_msgs::LaserScan& msg) {
-  Scan scan;
-  scan.ranges.assign(msg.ranges.begin(), msg.ranges.end());
-  scan.angle_min = msg.angle_min;
-  scan.angle_increment = msg.angle_increment;
-  scan.range_min = msg.range_min;
-  scan.range_max = msg.range_max;
-  scan.stamp = msg.header.stamp.toSec();
-  return scan;
 }
 
 void finish(LogData* out, const OdometryTrack& track, double max_gap) {
@@ -75,7 +65,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         if (!msg) return path + ": topic " + topic + " is not sensor_msgs/LaserScan";
         LoggedScan s;
         s.seq = msg->header.seq;
-        s.scan = toScan(*msg);
+        s.scan = ros_conversions::fromLaserScan(*msg);
         if (data.laser_frame.empty()) data.laser_frame = stripSlash(msg->header.frame_id);
         data.scans.push_back(std::move(s));
       } else if (options.odometry_source == "odom" && topic == options.odom_topic) {

@@ -12,6 +12,9 @@ namespace {
 constexpr double kHuge = std::numeric_limits<double>::max();
 
 void bindFeatures(YamlBinder b, FeatureOptions* f) {
+  std::string mode = f->cluster_mode == ClusterMode::kFixed ? "fixed" : "adaptive";
+  b.text("cluster_mode", &mode, {"fixed", "adaptive"});
+  f->cluster_mode = mode == "fixed" ? ClusterMode::kFixed : ClusterMode::kAdaptive;
   b.number("range_sigma", &f->range_sigma, 1e-6, 10.0);
   b.number("bearing_sigma", &f->bearing_sigma, 0.0, 1.0);
   b.number("cluster_threshold", &f->cluster_threshold, 1e-3, 10.0);
