@@ -100,6 +100,12 @@ class Lms200NodeTest(unittest.TestCase):
             return
         self.obs.wait_for(lambda: self.obs.diagnostics.get("Baud") == "38400", 20.0,
                           "diagnostics reporting 38400 baud")
+        # 181 values at 38400 baud: 372 bytes take 97 ms, so a scan every 8
+        # mirror turns (9.375 Hz); at 9600 baud it would be about 2.4 Hz.
+        self.obs.wait_for(lambda: float(self.obs.diagnostics.get("Scan rate (Hz)", "0")) > 8.0,
+                          20.0, "diagnostics reporting a scan rate above 8 Hz")
+        self.assertAlmostEqual(float(self.obs.diagnostics["Expected scan rate (Hz)"]), 9.38,
+                               places=2)
         with self.obs.lock:
             events = [text for _, text in self.obs.events]
         self.assertIn("baud 38400", events, "the emulator never switched to 38400: %s" % events)
