@@ -280,6 +280,18 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   if (slots.empty()) return;
   std::vector<char> drop(landmarkCount(), 0);
   for (int s : slots) drop[s] = 1;
+  // Dropping only the newest landmarks (often the tentative ones) needs no
+  // copy: the live block just ends earlier.
+  int trailing = 0;
+  while (trailing < landmarkCount() && drop[landmarkCount() - 1 - trailing]) ++trailing;
+  if (trailing == static_cast<int>(slots.size())) {
+    for (int k = 0; k < trailing; ++k) {
+      slot_of_id_.erase(landmarks_.back().id);
+      landmarks_.pop_back();
+    }
+    dim_ -= kLandmarkDim * trailing;
+    return;
+  }
   std::vector<int> keep_index = {0, 1, 2};
   std::vector<LandmarkInfo> kept;
   for (int s = 0; s < landmarkCount(); ++s) {

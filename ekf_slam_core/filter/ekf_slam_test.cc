@@ -246,6 +246,22 @@ TEST(EkfSlam, RemovingALandmarkKeepsTheOthersJointCovariance) {
   EXPECT_EQ(filter.slotOf(filter.landmarks()[1].id), 1);
 }
 
+TEST(EkfSlam, RemovingTheNewestLandmarkNeedsNoCopyAndKeepsTheRest) {
+  EkfSlam filter = builtFilter();
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  int id = -1;
+  ASSERT_EQ(filter.augment(observation(2.5, -0.2), &id), FilterStatus::kOk);
+  ASSERT_TRUE(filter.removeLandmark(id));
+  EXPECT_EQ(filter.covariance(), P);
+  EXPECT_EQ(filter.state(), x);
+  EXPECT_EQ(filter.slotOf(id), -1);
+  // And the state grows again from there.
+  ASSERT_EQ(filter.augment(observation(2.5, -0.2), &id), FilterStatus::kOk);
+  EXPECT_EQ(filter.slotOf(id), 3);
+  EXPECT_EQ(filter.stateDim(), 11);
+}
+
 TEST(EkfSlam, OptionsValidationNamesTheField) {
   FilterOptions options;
   EXPECT_EQ(options.validate(), "");
