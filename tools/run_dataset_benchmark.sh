@@ -5,7 +5,7 @@
 # memory. Results go to output/benchmark/<dataset>/ and a summary table to
 # output/benchmark/summary.md.
 #
-# usage: run_dataset_benchmark.sh DEVEL_DIR [OUT_DIR] [CONFIG]
+# usage: [DATASETS="intel aces"] run_dataset_benchmark.sh DEVEL_DIR [OUT_DIR] [CONFIG]
 set -euo pipefail
 devel=${1:?usage: run_dataset_benchmark.sh DEVEL_DIR [OUT_DIR] [CONFIG]}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -23,7 +23,7 @@ summary=$out/summary.md
   echo "| dataset | trajectory | relations used | translation [m] | rotation [deg] | wall-clock [s] | real-time factor | peak memory [MiB] |"
   echo "|---|---|---|---|---|---|---|---|"
 } > "$summary"
-for name in intel aces; do
+for name in ${DATASETS:-intel aces}; do
   bag=$data/$name.orig.bag
   rel=$data/$name.relations
   [ -f "$bag" ] || { echo "run_dataset_benchmark: $bag missing, skipped" >&2; continue; }
