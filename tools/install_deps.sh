@@ -5,15 +5,15 @@ set -euo pipefail
 
 PACKAGES=(
   # build
-  build-essential cmake catkin clang-format
+  build-essential cmake pkgconf catkin clang-format
   # ROS 1 from Debian
   ros-core-dev libroscpp-dev librosbag-dev librostest-dev python3-rostest
   libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev
-  libdiagnostic-updater-dev libdiagnostic-msgs-dev
+  libdiagnostic-updater-dev libdiagnostic-msgs-dev libtf2-msgs-dev
   ros-message-generation ros-message-runtime python3-rosbag python3-rospy
   # libraries
-  libeigen3-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
+  libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
   # figures
   python3-matplotlib python3-numpy python3-yaml
 )
