@@ -49,7 +49,7 @@ double PolygonWorld::castRay(const Vector2& origin, double angle, double max_ran
   return best <= max_range ? best : std::numeric_limits<double>::infinity();
 }
 
-std::vector<double> simulateRanges(const PolygonWorld& world, const Pose2& sensor_pose,
+std::vector<double> simulateRanges(const RayCaster& world, const Pose2& sensor_pose,
                                    const SweepGeometry& sweep, double range_sigma,
                                    std::mt19937* rng) {
   std::vector<double> ranges(sweep.count > 0 ? sweep.count : 0);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/sim/ray_caster.h"
 
 namespace ekf_slam {
 namespace sim {
@@ -16,7 +17,7 @@ struct Segment {
   Vector2 b;
 };
 
-class PolygonWorld {
+class PolygonWorld : public RayCaster {
  public:
   void addSegment(const Vector2& a, const Vector2& b);
   // Consecutive vertices joined by walls; `closed` joins the last to the first.
@@ -26,7 +27,7 @@ class PolygonWorld {
 
   // Distance (m) from `origin` along the world-frame direction `angle` (rad)
   // to the nearest segment, or +inf when nothing is hit within `max_range`.
-  double castRay(const Vector2& origin, double angle, double max_range) const;
+  double castRay(const Vector2& origin, double angle, double max_range) const override;
 
   const std::vector<Segment>& segments() const { return segments_; }
   // Every polygon/box vertex added (true corners of the world), duplicates
@@ -52,7 +53,7 @@ struct SweepGeometry {
 // Ranges (m) seen from `sensor_pose` (the laser frame in the world). When
 // `rng` is given, each finite range gets N(0, range_sigma²) noise; ranges stay
 // +inf for no return.
-std::vector<double> simulateRanges(const PolygonWorld& world, const Pose2& sensor_pose,
+std::vector<double> simulateRanges(const RayCaster& world, const Pose2& sensor_pose,
                                    const SweepGeometry& sweep, double range_sigma = 0.0,
                                    std::mt19937* rng = nullptr);
 

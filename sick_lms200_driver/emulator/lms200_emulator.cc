@@ -9,9 +9,8 @@
 
 namespace sick_lms200 {
 
-Lms200Emulator::Lms200Emulator(serial_io::ByteStream& stream,
-                               const ekf_slam::sim::PolygonWorld& world, PoseSource pose_source,
-                               EmulatorOptions options)
+Lms200Emulator::Lms200Emulator(serial_io::ByteStream& stream, const ekf_slam::sim::RayCaster& world,
+                               PoseSource pose_source, EmulatorOptions options)
     : stream_(stream),
       world_(world),
       pose_source_(std::move(pose_source)),

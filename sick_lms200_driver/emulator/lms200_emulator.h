@@ -58,7 +58,7 @@ class Lms200Emulator {
   using PoseSource = std::function<ekf_slam::Pose2(double t)>;
   using ScanObserver = std::function<void(const TrueScan&)>;
 
-  Lms200Emulator(serial_io::ByteStream& stream, const ekf_slam::sim::PolygonWorld& world,
+  Lms200Emulator(serial_io::ByteStream& stream, const ekf_slam::sim::RayCaster& world,
                  PoseSource pose_source, EmulatorOptions options);
 
   // The host's current line speed (e.g. PseudoTerminal::peerBaud); when it
@@ -95,7 +95,7 @@ class Lms200Emulator {
   double byteTime() const { return 10.0 / baud_; }
 
   serial_io::ByteStream& stream_;
-  const ekf_slam::sim::PolygonWorld& world_;
+  const ekf_slam::sim::RayCaster& world_;
   PoseSource pose_source_;
   EmulatorOptions options_;
   std::function<int()> peer_baud_;
