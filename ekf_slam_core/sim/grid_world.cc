@@ -52,6 +52,8 @@ std::string GridWorld::load(const std::string& yaml_path, GridWorld* out) {
   int negate = 0;
   Vector2 origin = Vector2::Zero();
   bool have_origin = false;
+  bool have_start = false;
+  Pose2 start;
   std::string line;
   for (int number = 1; std::getline(yaml, line); ++number) {
     const size_t hash = line.find('#');
@@ -76,6 +78,14 @@ std::string GridWorld::load(const std::string& yaml_path, GridWorld* out) {
       }
       origin = Vector2(x, y);
       have_origin = true;
+    } else if (key == "start_pose") {
+      char bracket, comma1, comma2;
+      double x, y, yaw;
+      if (!(v >> bracket >> x >> comma1 >> y >> comma2 >> yaw) || bracket != '[') {
+        return yaml_path + ":" + std::to_string(number) + ": start_pose must be [x, y, yaw]";
+      }
+      start = Pose2(x, y, yaw);
+      have_start = true;
     }
   }
   if (image.empty()) return yaml_path + ": no 'image'";
@@ -120,6 +130,8 @@ std::string GridWorld::load(const std::string& yaml_path, GridWorld* out) {
     }
   }
   *out = GridWorld(width, height, resolution, origin, std::move(occupied));
+  out->has_start_pose_ = have_start;
+  out->start_pose_ = start;
   return "";
 }
 

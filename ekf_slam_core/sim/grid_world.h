@@ -31,6 +31,11 @@ class GridWorld : public RayCaster {
            occupied_[static_cast<size_t>(iy) * width_ + ix];
   }
   bool occupiedAt(const Vector2& p) const;
+  // The `start_pose: [x, y, yaw]` key of the YAML (not part of map_server's
+  // format; the shipped worlds give a free pose for the robot), if present.
+  bool hasStartPose() const { return has_start_pose_; }
+  Pose2 startPose() const { return start_pose_; }
+
   int width() const { return width_; }
   int height() const { return height_; }
   double resolution() const { return resolution_; }
@@ -41,6 +46,8 @@ class GridWorld : public RayCaster {
   double resolution_ = 0.05;
   Vector2 origin_ = Vector2::Zero();
   std::vector<bool> occupied_;
+  bool has_start_pose_ = false;
+  Pose2 start_pose_;
 };
 
 }  // namespace sim

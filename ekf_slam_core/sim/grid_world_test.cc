@@ -101,6 +101,27 @@ TEST(GridWorld, ARasterisedRoomMatchesItsPolygonsWithinACell) {
   ::unlink((kTmp + "_room.pgm").c_str());
 }
 
+// Every shipped world loads, its start pose is free, and it is closed: a
+// robot cannot see out of it.
+TEST(GridWorld, ShippedWorldsLoadAndAreClosed) {
+  const std::string dir = std::string(EKF_SLAM_SOURCE_DIR) + "/config/worlds/";
+  int worlds = 0;
+  for (const char* name : {"carton_layout", "office"}) {
+    GridWorld world;
+    ASSERT_EQ(GridWorld::load(dir + name + ".yaml", &world), "") << name;
+    ASSERT_TRUE(world.hasStartPose()) << name;
+    const Pose2 start = world.startPose();
+    EXPECT_FALSE(world.occupiedAt(start.translation())) << name;
+    for (int i = 0; i < 360; ++i) {
+      const double range = world.castRay(start.translation(), degToRad(i), 50.0);
+      EXPECT_TRUE(std::isfinite(range)) << name << " open towards " << i << " deg";
+      EXPECT_GT(range, 0.2) << name << ": start pose too close to an obstacle";
+    }
+    ++worlds;
+  }
+  EXPECT_EQ(worlds, 2);
+}
+
 TEST(GridWorld, BadFilesAreNamed) {
   GridWorld world;
   EXPECT_NE(GridWorld::load("/nonexistent.yaml", &world).find("cannot open"), std::string::npos);
