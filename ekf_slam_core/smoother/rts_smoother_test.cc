@@ -39,26 +39,34 @@ LinearChain makeChain(int steps, unsigned seed) {
   return c;
 }
 
-TEST(RtsSmoother, ReproducesTheBatchSolutionOfALinearGaussianChain) {
-  const int N = 40;
-  const LinearChain c = makeChain(N, 11);
-
-  // Forward Kalman filter, recording what the EKF-SLAM run records.
+// Forward Kalman filter over the chain, observing every `observe_every`-th
+// step, recording what the EKF-SLAM run records.
+TrajectoryRecorder runForward(const LinearChain& c, int steps, int observe_every) {
   TrajectoryRecorder recorder;
   Vector3 x = c.m0;
   Matrix3 P = c.P0;
-  for (int k = 0; k < N; ++k) {
+  for (int k = 0; k < steps; ++k) {
     if (k > 0) {
       x = c.A * x;
       P = c.A * P * c.A.transpose() + c.Q;
       recorder.addTransition(c.A, Pose2::fromVector(x), P);
     }
-    const Matrix3 K = P * (P + c.R).inverse();
-    x = x + K * (c.z[k] - x);
-    P = (Matrix3::Identity() - K) * P;
-    P = 0.5 * (P + P.transpose()).eval();
+    if (k % observe_every == 0) {
+      const Matrix3 K = P * (P + c.R).inverse();
+      x = x + K * (c.z[k] - x);
+      P = (Matrix3::Identity() - K) * P;
+      P = 0.5 * (P + P.transpose()).eval();
+    }
     recorder.addFiltered(k, Pose2::fromVector(x), P);
   }
+  return recorder;
+}
+
+TEST(RtsSmoother, ReproducesTheBatchSolutionOfALinearGaussianChain) {
+  const int N = 40;
+  const LinearChain c = makeChain(N, 11);
+
+  const TrajectoryRecorder recorder = runForward(c, N, 1);
   const std::vector<SmoothedPose> smoothed = smoothTrajectory(recorder.steps());
 
   // Batch: information matrix Λ and vector η of all 3N states.
@@ -92,23 +100,7 @@ TEST(RtsSmoother, ReproducesTheBatchSolutionOfALinearGaussianChain) {
 TEST(RtsSmoother, SmoothedCovarianceIsNeverLargerThanFiltered) {
   const int N = 60;
   const LinearChain c = makeChain(N, 3);
-  TrajectoryRecorder recorder;
-  Vector3 x = c.m0;
-  Matrix3 P = c.P0;
-  for (int k = 0; k < N; ++k) {
-    if (k > 0) {
-      x = c.A * x;
-      P = c.A * P * c.A.transpose() + c.Q;
-      recorder.addTransition(c.A, Pose2::fromVector(x), P);
-    }
-    if (k % 5 == 0) {  // observations only now and then
-      const Matrix3 K = P * (P + c.R).inverse();
-      x = x + K * (c.z[k] - x);
-      P = (Matrix3::Identity() - K) * P;
-      P = 0.5 * (P + P.transpose()).eval();
-    }
-    recorder.addFiltered(k, Pose2::fromVector(x), P);
-  }
+  const TrajectoryRecorder recorder = runForward(c, N, 5);  // observations only now and then
   const std::vector<SmoothedPose> smoothed = smoothTrajectory(recorder.steps());
   for (int k = 0; k < N; ++k) {
     const Matrix3 difference = recorder.steps()[k].filtered_cov - smoothed[k].covariance;
