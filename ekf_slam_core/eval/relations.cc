@@ -26,30 +26,43 @@ bool isContentLine(const std::string& line) {
   return first != std::string::npos && line[first] != '#';
 }
 
-}  // namespace
-
-std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out) {
+// Reads the content lines of `path` (comments and blank lines skipped) with
+// `parse`, which returns an empty string or the problem with that line. On
+// any error `out` is left untouched: no partial result.
+template <typename T, typename Parse>
+std::string readRecords(const std::string& path, std::vector<T>* out, Parse parse) {
   std::ifstream in(path);
   if (!in) return path + ": cannot open";
-  out->clear();
+  std::vector<T> records;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
     if (!isContentLine(line)) continue;
     std::istringstream fields(line);
-    StampedPose p;
+    T record;
+    const std::string problem = parse(fields, &record);
+    if (!problem.empty()) return path + ":" + std::to_string(number) + ": " + problem;
+    records.push_back(record);
+  }
+  *out = std::move(records);
+  return "";
+}
+
+}  // namespace
+
+std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out) {
+  return readRecords(path, out, [](std::istringstream& fields, StampedPose* p) -> std::string {
     double x, y, theta;
     std::string extra;
-    if (!(fields >> p.stamp >> x >> y >> theta) || (fields >> extra)) {
-      return path + ":" + std::to_string(number) + ": expected 'stamp x y theta'";
+    if (!(fields >> p->stamp >> x >> y >> theta) || (fields >> extra)) {
+      return "expected 'stamp x y theta'";
     }
-    if (!std::isfinite(p.stamp) || !std::isfinite(x) || !std::isfinite(y) ||
+    if (!std::isfinite(p->stamp) || !std::isfinite(x) || !std::isfinite(y) ||
         !std::isfinite(theta)) {
-      return path + ":" + std::to_string(number) + ": non-finite value";
+      return "non-finite value";
     }
-    p.pose = Pose2(x, y, theta);
-    out->push_back(p);
-  }
-  return "";
+    p->pose = Pose2(x, y, theta);
+    return "";
+  });
 }
 
 std::string writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
@@ -62,22 +75,14 @@ std::string writeTrajectory(const std::string& path, const std::vector<StampedPo
 }
 
 std::string readRelations(const std::string& path, std::vector<Relation>* out) {
-  std::ifstream in(path);
-  if (!in) return path + ": cannot open";
-  out->clear();
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    if (!isContentLine(line)) continue;
-    std::istringstream fields(line);
-    Relation r;
+  return readRecords(path, out, [](std::istringstream& fields, Relation* r) -> std::string {
     double x, y, z, roll, pitch, yaw;
-    if (!(fields >> r.t1 >> r.t2 >> x >> y >> z >> roll >> pitch >> yaw)) {
-      return path + ":" + std::to_string(number) + ": expected 't1 t2 x y z roll pitch yaw'";
+    if (!(fields >> r->t1 >> r->t2 >> x >> y >> z >> roll >> pitch >> yaw)) {
+      return "expected 't1 t2 x y z roll pitch yaw'";
     }
-    r.motion = Pose2(x, y, yaw);
-    out->push_back(r);
-  }
-  return "";
+    r->motion = Pose2(x, y, yaw);
+    return "";
+  });
 }
 
 RelationErrors evaluateRelations(const std::vector<Relation>& relations,
