@@ -35,6 +35,10 @@ const char* toString(FilterStatus status) {
       return "unknown landmark";
     case FilterStatus::kBadObservation:
       return "observation undefined (landmark at sensor origin)";
+    case FilterStatus::kMappingDisabled:
+      return "new landmarks disabled (localisation only)";
+    case FilterStatus::kDuplicateLandmark:
+      return "a landmark with this id exists";
   }
   return "unknown status";
 }
@@ -224,6 +228,7 @@ void EkfSlam::mirrorLowerToUpper() {
 }
 
 FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) {
+  if (!mapping_enabled_) return FilterStatus::kMappingDisabled;
   if (!std::isfinite(observation.z.range) || !std::isfinite(observation.z.bearing)) {
     return FilterStatus::kNonFiniteInput;
   }
@@ -253,6 +258,32 @@ FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) 
   slot_of_id_[info.id] = landmarkCount();
   landmarks_.push_back(info);
   if (new_id) *new_id = info.id;
+  return FilterStatus::kOk;
+}
+
+FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2& covariance,
+                                  int observations) {
+  if (!position.allFinite() || !covariance.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(covariance)) return FilterStatus::kSingularInnovation;
+  if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
+  const int n = dim_;
+  reserve(n + kLandmarkDim);
+  // A prior map is known independently of where the robot is now: the new
+  // rows and columns carry no correlation with the pose or other landmarks.
+  x_.segment<2>(n) = position;
+  P_.block(n, 0, 2, n).setZero();
+  P_.block(0, n, n, 2).setZero();
+  P_.block<2, 2>(n, n) = 0.5 * (covariance + covariance.transpose());
+  dim_ = n + kLandmarkDim;
+
+  LandmarkInfo info;
+  info.id = id;
+  info.observations = std::max(1, observations);
+  info.created_step = step_;
+  info.last_seen_step = step_;
+  slot_of_id_[id] = landmarkCount();
+  landmarks_.push_back(info);
+  next_id_ = std::max(next_id_, id + 1);
   return FilterStatus::kOk;
 }
 

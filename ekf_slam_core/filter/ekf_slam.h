@@ -94,6 +94,19 @@ class EkfSlam {
   int pruneTentative();
   bool removeLandmark(int id);
 
+  // Seeds a landmark from a prior map (e.g. one saved earlier): mean and
+  // covariance in the map frame, uncorrelated with the pose and the other
+  // landmarks. Keeps `id` (later landmarks get larger ids). Refused with
+  // kDuplicateLandmark when the id exists, kSingularInnovation when the
+  // covariance is not symmetric positive definite.
+  FilterStatus addLandmark(int id, const Vector2& position, const Matrix2& covariance,
+                           int observations = 2);
+
+  // Localisation only when false: augment() refuses (kMappingDisabled), so
+  // the map keeps its landmarks and gains none. On by default.
+  void setMappingEnabled(bool enabled) { mapping_enabled_ = enabled; }
+  bool mappingEnabled() const { return mapping_enabled_; }
+
   Pose2 pose() const { return Pose2(x_(0), x_(1), x_(2)); }
   Matrix3 poseCovariance() const { return P_.topLeftCorner<3, 3>(); }
   int landmarkCount() const { return static_cast<int>(landmarks_.size()); }
@@ -130,6 +143,7 @@ class EkfSlam {
   int next_id_ = 0;
   long step_ = 0;
   Matrix3 last_F_ = Matrix3::Identity();
+  bool mapping_enabled_ = true;
 };
 
 }  // namespace ekf_slam
