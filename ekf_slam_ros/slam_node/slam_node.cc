@@ -200,9 +200,10 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
           tf_buffer_.lookupTransform(target, source, ros::Time(0)).header.stamp;
       if (latest.isZero()) {
         text << " (only a static transform? " << e.what() << ")";
+      } else if (latest < stamp) {
+        text << ": the newest is " << (stamp - latest).toSec() << " s older than the scan";
       } else {
-        text << ": the newest is " << (stamp - latest).toSec() << " s "
-             << (latest < stamp ? "older" : "newer") << " than the scan";
+        text << ": the scan is older than the transforms still buffered (" << e.what() << ")";
       }
     } catch (const tf2::TransformException&) {
       text << ": never received (" << e.what() << ")";
