@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -241,8 +242,11 @@ int main(int argc, char** argv) {
     const double sleep = wake - seconds();
     if (sleep > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(sleep));
   }
-  ROS_INFO("simulator: stopping after %lu scans, %lu P3-DX SIPs, %lu blocked motion steps",
-           static_cast<unsigned long>(scans), static_cast<unsigned long>(robot.stats().sips_sent),
-           static_cast<unsigned long>(blocked_steps));
+  // rosconsole is already shut down here (SIGINT): plain stdout.
+  std::printf("simulator: stopping after %lu scans, %lu P3-DX SIPs, %lu blocked motion steps\n",
+              static_cast<unsigned long>(scans),
+              static_cast<unsigned long>(robot.stats().sips_sent),
+              static_cast<unsigned long>(blocked_steps));
+  std::fflush(stdout);
   return 0;
 }

@@ -19,6 +19,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <csignal>
+#include <cstdio>
 #include <memory>
 #include <string>
 
@@ -134,9 +135,11 @@ int main(int argc, char** argv) {
       pose = Pose2(transform.transform.translation.x, transform.transform.translation.y,
                    tf2::getYaw(transform.transform.rotation));
       if (age > params.tf_timeout) {
-        why_lost = "the newest " + params.global_frame + " -> " + params.base_frame +
-                   " transform is " + std::to_string(age) + " s old (tf_timeout " +
-                   std::to_string(params.tf_timeout) + " s)";
+        char text[256];
+        std::snprintf(
+            text, sizeof(text), "the newest %s -> %s transform is %.2f s old (tf_timeout %.2f s)",
+            params.global_frame.c_str(), params.base_frame.c_str(), age, params.tf_timeout);
+        why_lost = text;
       }
     } catch (const tf2::TransformException& exception) {
       why_lost = "no transform " + params.global_frame + " -> " + params.base_frame + ": " +
