@@ -26,7 +26,7 @@ class OfficeLoop(unittest.TestCase):
         parser.add_argument("--out", required=True)
         parser.add_argument("--world", default="office")
         parser.add_argument("--timeout", type=float, default=800.0)
-        parser.add_argument("--slam-node", default="/ekf_slam_node")
+        parser.add_argument("--slam-node", default="/ekf_slam")
         args, _ = parser.parse_known_args(argv)
         r = sim_monitor.run(args)
         print(sim_monitor.report_text(r))

@@ -406,7 +406,7 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--world", default="office")
     parser.add_argument("--timeout", type=float, default=600.0)
-    parser.add_argument("--slam-node", default="/ekf_slam_node")
+    parser.add_argument("--slam-node", default="/ekf_slam")
     args, _ = parser.parse_known_args([a for a in sys.argv[1:] if not a.startswith("__")])
     result = run(args)
     sys.stdout.write(report_text(result))
