@@ -319,6 +319,11 @@ void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const 
   path_pose.pose = pose.pose.pose;
   path_.header.stamp = stamp;
   path_.poses.push_back(path_pose);
+  // A long run's whole path re-sent every scan would cost megabytes per
+  // message; the published path keeps the newest poses.
+  if (params_.path_max_poses > 0 && static_cast<int>(path_.poses.size()) > params_.path_max_poses) {
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - params_.path_max_poses);
+  }
   path_publisher_.publish(path_);
 
   if (result.outcome != ScanOutcome::kIterated) return;
