@@ -137,6 +137,20 @@ void SlamNode::drop(DropReason reason, const std::string& detail) {
 
 void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
   ++scans_received_;
+  // A bag restarted (or looped) under use_sim_time: the clock runs backwards.
+  // The tf buffer would refuse the old-new data; the map is kept (its stamps
+  // now lie in the future), so scans are dropped as not increasing until
+  // ~reset, which the log says.
+  const ros::Time now = ros::Time::now();
+  if (now + ros::Duration(1.0) < last_clock_) {
+    ROS_WARN(
+        "ekf_slam_node: the clock jumped back by %.3f s (bag restarted?): tf buffer "
+        "cleared; call ~reset to start a new map from the new data",
+        (last_clock_ - now).toSec());
+    tf_buffer_.clear();
+    queue_.clear();
+  }
+  last_clock_ = now;
   if (paused_) {
     drop(DropReason::kPaused, "");
     return;
