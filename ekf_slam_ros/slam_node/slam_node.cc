@@ -137,6 +137,20 @@ void SlamNode::drop(DropReason reason, const std::string& detail) {
 
 void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
   ++scans_received_;
+  // A bag restarted (or looped) under use_sim_time: the clock runs backwards.
+  // The tf buffer would refuse the old-new data; the map is kept (its stamps
+  // now lie in the future), so scans are dropped as not increasing until
+  // ~reset, which the log says.
+  const ros::Time now = ros::Time::now();
+  if (now + ros::Duration(1.0) < last_clock_) {
+    ROS_WARN(
+        "ekf_slam_node: the clock jumped back by %.3f s (bag restarted?): tf buffer "
+        "cleared; call ~reset to start a new map from the new data",
+        (last_clock_ - now).toSec());
+    tf_buffer_.clear();
+    queue_.clear();
+  }
+  last_clock_ = now;
   if (paused_) {
     drop(DropReason::kPaused, "");
     return;
@@ -319,6 +333,11 @@ void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const 
   path_pose.pose = pose.pose.pose;
   path_.header.stamp = stamp;
   path_.poses.push_back(path_pose);
+  // A long run's whole path re-sent every scan would cost megabytes per
+  // message; the published path keeps the newest poses.
+  if (params_.path_max_poses > 0 && static_cast<int>(path_.poses.size()) > params_.path_max_poses) {
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - params_.path_max_poses);
+  }
   path_publisher_.publish(path_);
 
   if (result.outcome != ScanOutcome::kIterated) return;

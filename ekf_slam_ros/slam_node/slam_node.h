@@ -117,6 +117,7 @@ class SlamNode {
   nav_msgs::Path path_;
   std::string laser_frame_;
   ros::Time last_scan_stamp_;  // of the last processed scan
+  ros::Time last_clock_;       // ros::Time::now() at the last scan (jump-back detection)
   ros::Time last_tf_stamp_;    // map→odom stamp last sent (before the tolerance)
   bool have_map_to_odom_ = false;
   Pose2 map_to_odom_;

@@ -29,6 +29,7 @@ struct SlamNodeParams {
   bool localize_only = false;          // start without adding landmarks
   std::string initial_map;             // landmark map file loaded at start ("" none)
   double diagnostic_period = 1.0;      // s
+  int path_max_poses = 10000;          // newest poses in `path` (0: all); the smoother keeps all
 };
 
 // False with `error` naming the key (resolved name) on a bad or unknown key.

@@ -7,6 +7,8 @@
 //     counts each case, the log names the frames, the map is unchanged.
 //   Services.*: pause / resume, save_map / reset / load_map, smooth.
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <ekf_slam/AssociationReport.h>
+#include <ekf_slam/Features.h>
 #include <ekf_slam/LandmarkMap.h>
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
@@ -28,6 +30,7 @@
 #include <map>
 #include <mutex>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "ekf_slam_core/io/landmark_map.h"
@@ -74,6 +77,10 @@ class Robot {
     std::lock_guard<std::mutex> lock(mutex_);
     return last_good_stamp_;
   }
+  bool wasScanStamp(const ros::Time& stamp) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return good_stamps_.count(stamp) > 0;
+  }
 
  private:
   Pose2 poseAt(double t) const {
@@ -117,7 +124,10 @@ class Robot {
   }
 
   void loop() {
-    start_ = ros::Time::now();
+    // One trajectory for the whole process: a later test continues where the
+    // previous one stopped, so the node never sees the odometry jump back.
+    static const ros::Time process_start = ros::Time::now();
+    start_ = process_start;
     ros::Rate rate(kRate);
     while (running_ && ros::ok()) {
       const ros::Time now = ros::Time::now();
@@ -127,6 +137,7 @@ class Robot {
         scans_.publish(makeScan(now));
         std::lock_guard<std::mutex> lock(mutex_);
         last_good_stamp_ = now;
+        good_stamps_.insert(now);
       }
       rate.sleep();
     }
@@ -140,6 +151,7 @@ class Robot {
   std::mt19937 rng_{42};
   std::mutex mutex_;
   ros::Time start_, last_good_stamp_;
+  std::set<ros::Time> good_stamps_;
   std::atomic<bool> running_{false};
   std::thread thread_;
 };
@@ -154,6 +166,8 @@ class Observer {
     // Every node publishes its log on /rosout directly (no rosout aggregator needed).
     subscribers_.push_back(node_.subscribe("/rosout", 500, &Observer::onLog, this));
     subscribers_.push_back(node_.subscribe("map", 1, &Observer::onGrid, this));
+    subscribers_.push_back(node_.subscribe("features", 10, &Observer::onFeatures, this));
+    subscribers_.push_back(node_.subscribe("association", 10, &Observer::onAssociation, this));
     subscribers_.push_back(node_.subscribe("smoothed_path", 1, &Observer::onSmoothedPath, this));
   }
 
@@ -201,6 +215,18 @@ class Observer {
     std::lock_guard<std::mutex> lock(mutex_);
     return grid_;
   }
+  ekf_slam::Features features() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return features_;
+  }
+  ekf_slam::AssociationReport association() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return association_;
+  }
+  geometry_msgs::PoseWithCovarianceStamped pose() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pose_;
+  }
   size_t smoothedPoses() {
     std::lock_guard<std::mutex> lock(mutex_);
     return smoothed_poses_;
@@ -224,6 +250,7 @@ class Observer {
     std::lock_guard<std::mutex> lock(mutex_);
     ++poses_;
     last_pose_stamp_ = pose.header.stamp;
+    pose_ = pose;
   }
   void onLog(const rosgraph_msgs::Log& log) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -236,6 +263,14 @@ class Observer {
   void onGrid(const nav_msgs::OccupancyGrid& grid) {
     std::lock_guard<std::mutex> lock(mutex_);
     grid_ = grid;
+  }
+  void onFeatures(const ekf_slam::Features& features) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    features_ = features;
+  }
+  void onAssociation(const ekf_slam::AssociationReport& report) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!report.observations.empty()) association_ = report;
   }
   void onSmoothedPath(const nav_msgs::Path& path) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -250,6 +285,9 @@ class Observer {
   ekf_slam::LandmarkMap map_;
   long maps_ = 0, poses_ = 0;
   ros::Time last_pose_stamp_;
+  geometry_msgs::PoseWithCovarianceStamped pose_;
+  ekf_slam::Features features_;
+  ekf_slam::AssociationReport association_;
   std::vector<std::string> log_;
   long other_lines_ = 0;
   nav_msgs::OccupancyGrid grid_;
@@ -361,6 +399,33 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
   EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations_before; }, 5.0));
   EXPECT_GT(observer_.maps(), maps_before);
+}
+
+TEST_F(SlamNodeTest, OutputsCarryTheScansStampsAndFrames) {
+  ros::WallDuration(1.0).sleep();
+  // Data time: every output is stamped with the stamp of a scan the robot sent.
+  const ekf_slam::Features features = observer_.features();
+  EXPECT_EQ(features.header.frame_id, "laser");
+  EXPECT_TRUE(robot_.wasScanStamp(features.header.stamp)) << features.header.stamp;
+  EXPECT_FALSE(features.lines.empty()) << "a room has walls";
+  const geometry_msgs::PoseWithCovarianceStamped pose = observer_.pose();
+  EXPECT_EQ(pose.header.frame_id, "map");
+  EXPECT_TRUE(robot_.wasScanStamp(pose.header.stamp)) << pose.header.stamp;
+  EXPECT_GT(pose.pose.covariance[0], 0.0);
+  const ekf_slam::LandmarkMap map = observer_.map();
+  EXPECT_EQ(map.header.frame_id, "map");
+  EXPECT_TRUE(robot_.wasScanStamp(map.header.stamp));
+  const ekf_slam::AssociationReport association = observer_.association();
+  EXPECT_EQ(association.header.frame_id, "laser");
+  EXPECT_TRUE(robot_.wasScanStamp(association.header.stamp));
+  int matched = 0;
+  for (const auto& o : association.observations) {
+    if (o.decision != "matched") continue;
+    ++matched;
+    ASSERT_FALSE(o.candidates.empty());
+    EXPECT_LT(o.candidates[0].mahalanobis_sq, o.gate);
+  }
+  EXPECT_GT(matched, 0) << "a corner seen again is matched";
 }
 
 TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
