@@ -10,7 +10,8 @@ Checks, on a real roscore with real pseudo-terminals:
     the true laser pose (truth at the scan stamp composed with the mount);
   - the waypoint driver finishes the carton loop in the odom frame within
     ~done_within, odometry moved, and the robot really ends near the last
-    waypoint (within goal tolerance plus odometry drift).
+    waypoint (within goal tolerance plus odometry drift);
+  - driven on into a carton, the robot stalls at robot_radius from it.
 """
 import bisect
 import math
