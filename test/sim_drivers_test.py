@@ -10,7 +10,8 @@ Checks, on a real roscore with real pseudo-terminals:
     the true laser pose (truth at the scan stamp composed with the mount);
   - the waypoint driver finishes the carton loop in the odom frame within
     ~done_within, odometry moved, and the robot really ends near the last
-    waypoint (within goal tolerance plus odometry drift).
+    waypoint (within goal tolerance plus odometry drift);
+  - driven on into a carton, the robot stalls at robot_radius from it.
 """
 import bisect
 import math
@@ -22,6 +23,7 @@ import genpy.dynamic
 import rospy
 import rostest
 import yaml
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool
@@ -31,6 +33,7 @@ MIN_SCAN_RATE = 8.0           # Hz; 9.38 Hz expected at 38400 baud
 LASER_X = 0.160               # m, config/calibration.yaml
 GOAL_TOLERANCE = 0.15         # m, waypoint_driver default
 DRIFT_ALLOWANCE = 0.25        # m, odometry drift over one ~9 m lap with the default wheel noise
+ROBOT_RADIUS = 0.26           # m, config/simulator.yaml
 
 
 def yaw_of(q):
@@ -79,6 +82,8 @@ class Listener:
         rospy.Subscriber("ground_truth/world", OccupancyGrid, self.on_world, queue_size=1)
         rospy.Subscriber("ground_truth/path", Path, self.on_path, queue_size=1)
         rospy.Subscriber("waypoint_driver/done", Bool, self.on_done, queue_size=1)
+        self.stalled = False
+        rospy.Subscriber("stall", Bool, self.on_stall, queue_size=10)
         # tf2_msgs has no Python package on Debian: the type is built from the
         # definition the publisher sends with the connection (as rosbag does).
         rospy.Subscriber("/tf_static", rospy.AnyMsg, self.on_static, queue_size=10)
@@ -108,6 +113,9 @@ class Listener:
 
     def on_done(self, message):
         self.done = message.data
+
+    def on_stall(self, message):
+        self.stalled = self.stalled or message.data
 
     def on_static(self, raw):
         header = raw._connection_header
@@ -147,6 +155,26 @@ def ray_cast(grid, origin, angle, max_range, step=0.01):
             return r
         r += step
     return float("inf")
+
+
+def clearance(grid, point, search):
+    """Distance from point (map frame) to the nearest occupied cell, up to search."""
+    info = grid.info
+    oyaw = yaw_of(info.origin.orientation)
+    c, s = math.cos(-oyaw), math.sin(-oyaw)
+    x, y = point[0] - info.origin.position.x, point[1] - info.origin.position.y
+    gx, gy = c * x - s * y, s * x + c * y
+    res = info.resolution
+    nearest = search
+    for iy in range(int(math.floor((gy - search) / res)), int(math.floor((gy + search) / res)) + 1):
+        for ix in range(int(math.floor((gx - search) / res)), int(math.floor((gx + search) / res)) + 1):
+            inside = 0 <= ix < info.width and 0 <= iy < info.height
+            if inside and grid.data[iy * info.width + ix] < 50:
+                continue
+            dx = gx - min(max(gx, ix * res), (ix + 1) * res)
+            dy = gy - min(max(gy, iy * res), (iy + 1) * res)
+            nearest = min(nearest, math.hypot(dx, dy))
+    return nearest
 
 
 class SimDriversTest(unittest.TestCase):
@@ -269,6 +297,32 @@ class SimDriversTest(unittest.TestCase):
         self.assertGreater(len(listener.path.poses), 100)  # ~9 m at 5 cm
         last = listener.path.poses[-1].pose.position
         self.assertLess(math.hypot(last.x - in_map[0], last.y - in_map[1]), 0.06)
+
+    def test_5_walls_stop_the_robot(self):
+        """Driven straight on after the loop, the robot must stall at a carton
+        or the wall, never overlap it."""
+        listener = self.listener
+        self.assertTrue(wait_for(lambda: listener.done is True, 5.0), "run the loop first")
+        cmd_vel = rospy.Publisher("cmd_vel", Twist, queue_size=1)
+        with listener.lock:
+            first = len(listener.truth)
+        twist = Twist()
+        twist.linear.x = 0.3
+        deadline = time.monotonic() + 11.0  # 3.3 m: beyond the next obstacle in any heading
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            cmd_vel.publish(twist)
+            time.sleep(0.1)
+        cmd_vel.publish(Twist())
+        with listener.lock:
+            poses = [between(self.start, p) for _, p in listener.truth[first:]]
+        self.assertTrue(listener.stalled, "the driver never reported a stall")
+        travelled = math.hypot(poses[-1][0] - poses[0][0], poses[-1][1] - poses[0][1])
+        rospy.loginfo("driven %.2f m into an obstacle", travelled)
+        self.assertLess(travelled, 3.0, "the robot went through something")
+        tightest = min(clearance(listener.world, p, 0.5) for p in poses[::10])
+        rospy.loginfo("tightest clearance while pushing: %.3f m", tightest)
+        self.assertGreater(tightest, ROBOT_RADIUS - 0.01)
+        self.assertLess(tightest, ROBOT_RADIUS + 0.05, "it stopped at the obstacle, not before")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,7 @@
 #include "ekf_slam_ros/simulator/ground_truth.h"
 
+#include <geometry_msgs/TransformStamped.h>
+
 #include <cmath>
 
 namespace ekf_slam {
@@ -47,6 +49,49 @@ nav_msgs::OccupancyGrid toOccupancyGrid(const GridWorld& world, const Pose2& fra
     }
   }
   return grid;
+}
+
+GroundTruthPublisher::GroundTruthPublisher(ros::NodeHandle& node, const GridWorld& world,
+                                           const Pose2& start, Frames frames, double path_spacing)
+    : start_(start), frames_(std::move(frames)), path_spacing_(path_spacing) {
+  odom_publisher_ = node.advertise<nav_msgs::Odometry>("ground_truth/odom", 20);
+  path_publisher_ = node.advertise<nav_msgs::Path>("ground_truth/path", 2, true);
+  world_publisher_ = node.advertise<nav_msgs::OccupancyGrid>("ground_truth/world", 1, true);
+  world_publisher_.publish(toOccupancyGrid(world, start_, ros::Time::now(), frames_.map));
+  path_.header.frame_id = frames_.map;
+}
+
+void GroundTruthPublisher::publish(const Pose2& truth, double velocity, double rotational_velocity,
+                                   const ros::Time& stamp) {
+  const nav_msgs::Odometry odometry =
+      toOdometry(truth, velocity, rotational_velocity, stamp, frames_.truth, frames_.truth_child);
+  odom_publisher_.publish(odometry);
+  geometry_msgs::TransformStamped transform;
+  transform.header = odometry.header;
+  transform.child_frame_id = frames_.truth_child;
+  transform.transform.translation.x = truth.x;
+  transform.transform.translation.y = truth.y;
+  transform.transform.rotation = odometry.pose.pose.orientation;
+  tf_broadcaster_.sendTransform(transform);
+
+  // The same pose in the SLAM map frame: start⁻¹ ∘ truth.
+  const Pose2 in_map = between(start_, truth);
+  const bool moved = path_.poses.empty() ||
+                     std::hypot(in_map.x - path_.poses.back().pose.position.x,
+                                in_map.y - path_.poses.back().pose.position.y) >= path_spacing_;
+  if (moved) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = stamp;
+    pose.header.frame_id = frames_.map;
+    pose.pose = toPoseMessage(in_map);
+    path_.poses.push_back(pose);
+  }
+  // The whole path at 2 Hz is plenty for rviz, and cheap for long runs.
+  if (last_path_publish_.isZero() || (stamp - last_path_publish_).toSec() >= 0.5) {
+    last_path_publish_ = stamp;
+    path_.header.stamp = stamp;
+    path_publisher_.publish(path_);
+  }
 }
 
 }  // namespace sim

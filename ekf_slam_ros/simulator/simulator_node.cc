@@ -15,12 +15,7 @@
 //   ground_truth/path   nav_msgs/Path in the SLAM map frame
 //   ground_truth/world  nav_msgs/OccupancyGrid in the SLAM map frame, latched
 // The SLAM map frame is the start pose: pose_in_map = start⁻¹ ∘ pose_in_world.
-#include <geometry_msgs/TransformStamped.h>
-#include <nav_msgs/OccupancyGrid.h>
-#include <nav_msgs/Odometry.h>
-#include <nav_msgs/Path.h>
 #include <ros/ros.h>
-#include <tf2_ros/transform_broadcaster.h>
 
 #include <algorithm>
 #include <chrono>
@@ -34,7 +29,7 @@
 #include "ekf_slam_ros/simulator/footprint.h"
 #include "ekf_slam_ros/simulator/ground_truth.h"
 #include "ekf_slam_ros/simulator/pose_history.h"
-#include "ekf_slam_ros/simulator/private_params.h"
+#include "ekf_slam_ros/simulator/simulator_params.h"
 #include "p3dx_driver/emulator/p3dx_emulator.h"
 #include "serial_io/pseudo_terminal.h"
 #include "sick_lms200_driver/emulator/lms200_emulator.h"
@@ -42,48 +37,6 @@
 namespace {
 
 using ekf_slam::Pose2;
-
-// Defaults and units: config/simulator.yaml and docs/simulation.md.
-struct SimulatorParams {
-  std::string world_file;        // map_server YAML with start_pose
-  std::string calibration_file;  // config/calibration.yaml
-  std::string p3dx_link = "/tmp/ekf_slam_sim/p3dx";
-  std::string lms200_link = "/tmp/ekf_slam_sim/lms200";
-  double robot_radius = 0.26;     // m, P3-DX body: 455 mm x 381 mm (plus wheels)
-  double wheel_noise = 0.03;      // std of each wheel's distance error per robot_step, fraction
-  double range_noise = 0.01;      // m, 1-sigma of each laser range
-  int seed = 1;                   // random seed of both noise models
-  double robot_step = 0.01;       // s, P3-DX integration period
-  double ground_truth_rate = 50;  // Hz
-  double path_spacing = 0.05;     // m between ground_truth/path poses
-  std::string truth_frame = "ground_truth";
-  std::string truth_child_frame = "base_link_truth";
-  std::string map_frame = "map";
-};
-
-bool loadParams(const ros::NodeHandle& private_node, SimulatorParams* params, std::string* error) {
-  ekf_slam::PrivateParams load(private_node);
-  load.text("world_file", &params->world_file);
-  load.text("calibration_file", &params->calibration_file);
-  load.text("p3dx_link", &params->p3dx_link);
-  load.text("lms200_link", &params->lms200_link);
-  load.number("robot_radius", &params->robot_radius, 0.05, 1.0);
-  load.number("wheel_noise", &params->wheel_noise, 0.0, 0.5);
-  load.number("range_noise", &params->range_noise, 0.0, 0.5);
-  load.integer("seed", &params->seed, 0, 1000000000);
-  load.number("robot_step", &params->robot_step, 0.001, 0.1);
-  load.number("ground_truth_rate", &params->ground_truth_rate, 1.0, 500.0);
-  load.number("path_spacing", &params->path_spacing, 0.0, 10.0);
-  load.text("truth_frame", &params->truth_frame);
-  load.text("truth_child_frame", &params->truth_child_frame);
-  load.text("map_frame", &params->map_frame);
-  if (params->p3dx_link == params->lms200_link) {
-    load.fail("lms200_link", "must differ from p3dx_link (" + params->p3dx_link + ")");
-  }
-  load.rejectUnknown();
-  *error = load.errors();
-  return load.ok();
-}
 
 // A pseudo-terminal whose symlink's folder exists (created when missing).
 bool openPty(serial_io::PseudoTerminal* pty, const std::string& link, std::string* error) {
@@ -101,9 +54,9 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "simulator");
   ros::NodeHandle node, private_node("~");
 
-  SimulatorParams params;
+  ekf_slam::sim::SimulatorParams params;
   std::string error;
-  if (!loadParams(private_node, &params, &error)) {
+  if (!ekf_slam::sim::loadSimulatorParams(private_node, &params, &error)) {
     ROS_FATAL("simulator: bad parameters:\n%s", error.c_str());
     return 1;
   }
@@ -170,15 +123,12 @@ int main(int argc, char** argv) {
   uint64_t scans = 0;
   laser.setScanObserver([&](const sick_lms200::TrueScan&) { ++scans; });
 
-  ros::Publisher odom_publisher = node.advertise<nav_msgs::Odometry>("ground_truth/odom", 20);
-  ros::Publisher path_publisher = node.advertise<nav_msgs::Path>("ground_truth/path", 2, true);
-  ros::Publisher world_publisher =
-      node.advertise<nav_msgs::OccupancyGrid>("ground_truth/world", 1, true);
-  tf2_ros::TransformBroadcaster tf_broadcaster;
-  world_publisher.publish(
-      ekf_slam::sim::toOccupancyGrid(world, start, ros::Time::now(), params.map_frame));
-  nav_msgs::Path path;
-  path.header.frame_id = params.map_frame;
+  ekf_slam::sim::GroundTruthPublisher::Frames frames;
+  frames.truth = params.truth_frame;
+  frames.truth_child = params.truth_child_frame;
+  frames.map = params.map_frame;
+  ekf_slam::sim::GroundTruthPublisher truth_publisher(node, world, start, frames,
+                                                      params.path_spacing);
 
   ROS_INFO(
       "simulator: world %s (%d x %d cells), start (%.2f, %.2f, %.3f); P3-DX on %s, "
@@ -191,7 +141,7 @@ int main(int argc, char** argv) {
   const Clock::time_point epoch = Clock::now();
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - epoch).count(); };
   const double truth_period = 1.0 / params.ground_truth_rate;
-  double next_robot_step = 0.0, next_truth = 0.0, next_path_publish = 0.0;
+  double next_robot_step = 0.0, next_truth = 0.0;
   history.add(0.0, start);
   while (ros::ok()) {
     const double now = seconds();
@@ -203,37 +153,8 @@ int main(int argc, char** argv) {
     laser.spinOnce(now);
     if (now >= next_truth) {
       next_truth = std::max(next_truth + truth_period, now);
-      const ros::Time stamp = ros::Time::now();
-      const Pose2& truth = robot.truePose();
-      const nav_msgs::Odometry odometry =
-          ekf_slam::sim::toOdometry(truth, robot.velocity(), robot.rotationalVelocity(), stamp,
-                                    params.truth_frame, params.truth_child_frame);
-      odom_publisher.publish(odometry);
-      geometry_msgs::TransformStamped transform;
-      transform.header = odometry.header;
-      transform.child_frame_id = params.truth_child_frame;
-      transform.transform.translation.x = truth.x;
-      transform.transform.translation.y = truth.y;
-      transform.transform.rotation = odometry.pose.pose.orientation;
-      tf_broadcaster.sendTransform(transform);
-
-      const Pose2 in_map = ekf_slam::between(start, truth);
-      const bool moved =
-          path.poses.empty() ||
-          std::hypot(in_map.x - path.poses.back().pose.position.x,
-                     in_map.y - path.poses.back().pose.position.y) >= params.path_spacing;
-      if (moved) {
-        geometry_msgs::PoseStamped pose;
-        pose.header.stamp = stamp;
-        pose.header.frame_id = params.map_frame;
-        pose.pose = ekf_slam::sim::toPoseMessage(in_map);
-        path.poses.push_back(pose);
-      }
-      if (now >= next_path_publish) {  // the whole path at 2 Hz is plenty for rviz
-        next_path_publish = now + 0.5;
-        path.header.stamp = stamp;
-        path_publisher.publish(path);
-      }
+      truth_publisher.publish(robot.truePose(), robot.velocity(), robot.rotationalVelocity(),
+                              ros::Time::now());
     }
     // Sleep to the earliest deadline; at most 5 ms so that commands from
     // the drivers are answered promptly (a real device answers within ms).
