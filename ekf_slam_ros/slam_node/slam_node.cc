@@ -75,6 +75,8 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
 
   pose_publisher_ = node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   path_publisher_ = node_.advertise<nav_msgs::Path>("path", 1, /*latch=*/true);
+  odometry_path_publisher_ = node_.advertise<nav_msgs::Path>("odometry_path", 1, /*latch=*/true);
+  odometry_path_.header.frame_id = params_.map_frame;
   landmarks_publisher_ = node_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);
   landmark_map_publisher_ = node_.advertise<LandmarkMap>("landmark_map", 1, /*latch=*/true);
   association_publisher_ = node_.advertise<AssociationReport>("association", 10);
@@ -340,6 +342,19 @@ void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const 
   }
   path_publisher_.publish(path_);
 
+  if (!odometry_anchor_) odometry_anchor_ = compose(result.pose, inverse(odometry));
+  geometry_msgs::PoseStamped odometry_pose;
+  odometry_pose.header = map_header;
+  odometry_pose.pose = toPoseMessage(compose(*odometry_anchor_, odometry));
+  odometry_path_.header.stamp = stamp;
+  odometry_path_.poses.push_back(odometry_pose);
+  if (params_.path_max_poses > 0 &&
+      static_cast<int>(odometry_path_.poses.size()) > params_.path_max_poses) {
+    odometry_path_.poses.erase(odometry_path_.poses.begin(),
+                               odometry_path_.poses.end() - params_.path_max_poses);
+  }
+  odometry_path_publisher_.publish(odometry_path_);
+
   if (result.outcome != ScanOutcome::kIterated) return;
   for (double nis : result.iteration.nis) {
     nis_window_.push_back(nis);
@@ -505,6 +520,8 @@ void SlamNode::resetState() {
   last_accepted_stamp_.reset();
   stored_scans_.clear();
   path_.poses.clear();
+  odometry_path_.poses.clear();
+  odometry_anchor_.reset();
   nis_window_.clear();
   have_map_to_odom_ = false;
   iterations_at_last_diagnostic_ = 0;

@@ -99,7 +99,7 @@ class SlamNode {
 
   ros::Subscriber scan_subscriber_;
   ros::Publisher pose_publisher_, path_publisher_, landmarks_publisher_, landmark_map_publisher_,
-      association_publisher_, smoothed_path_publisher_, map_publisher_;
+      association_publisher_, smoothed_path_publisher_, map_publisher_, odometry_path_publisher_;
   std::vector<ros::ServiceServer> services_;
   ros::Timer tf_timer_, drain_timer_, diagnostic_timer_;
   diagnostic_updater::Updater diagnostics_;
@@ -115,6 +115,10 @@ class SlamNode {
   std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
   std::vector<Scan> stored_scans_;                // one per pipeline record, for the map
   nav_msgs::Path path_;
+  // The robot's own odometry drawn in the map frame, tied to the SLAM pose at
+  // the first scan: where the robot would believe it is without SLAM.
+  nav_msgs::Path odometry_path_;
+  std::optional<Pose2> odometry_anchor_;  // map → odom at the first scan
   std::string laser_frame_;
   ros::Time last_scan_stamp_;  // of the last processed scan
   ros::Time last_clock_;       // ros::Time::now() at the last scan (jump-back detection)
