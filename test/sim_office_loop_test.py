@@ -6,7 +6,12 @@ with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
   - average pose NEES inside its two-sided 95 % band (the band is computed
     for the number of independent samples the time-correlated series holds);
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
-    same true corner).
+    same true corner);
+and then (issue 7) replays the run's recording through offline.launch
+(sim_replay_test.pause_and_replay): the offline outputs exist, the run is
+reproduced (same landmarks, final pose within 1 cm), and the RTS-smoothed
+trajectory is closer to the ground truth than the filtered one, which drifted
+until the loop closed.
 """
 import os
 import sys
@@ -15,8 +20,11 @@ import unittest
 import rospkg
 import rostest
 
-sys.path.insert(0, os.path.join(rospkg.RosPack().get_path("ekf_slam"), "tools"))
+ROOT = rospkg.RosPack().get_path("ekf_slam")
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+sys.path.insert(0, os.path.join(ROOT, "test"))
 import sim_monitor  # noqa: E402
+import sim_replay_test  # noqa: E402
 
 
 class OfficeLoop(unittest.TestCase):
@@ -28,7 +36,7 @@ class OfficeLoop(unittest.TestCase):
         parser.add_argument("--timeout", type=float, default=800.0)
         parser.add_argument("--slam-node", default="/ekf_slam")
         args, _ = parser.parse_known_args(argv)
-        r = sim_monitor.run(args)
+        r = sim_monitor.run(args)  # rospy.init_node is done here
         print(sim_monitor.report_text(r))
         self.assertLess(r["final_position_error"], 0.10)
         self.assertLess(r["final_heading_error_deg"], 2.0)
@@ -39,6 +47,14 @@ class OfficeLoop(unittest.TestCase):
         self.assertLess(r["nees_average"], high)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)
+
+        bag = argv[argv.index("--bag") + 1]
+        replay = sim_replay_test.pause_and_replay(self, os.path.join(args.out, "replay"),
+                                                  "/office_loop_recorder", bag,
+                                                  wait_for_done=False)
+        self.assertEqual(replay["offline_landmarks"], replay["live_landmarks"])
+        self.assertLess(replay["distance"], 0.01)
+        self.assertLess(replay["smoothed_error"], replay["filtered_error"])
 
 
 if __name__ == "__main__":
