@@ -19,12 +19,14 @@
 // - A scan whose geometry is unusable: no iteration, pose dead-reckoned.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_core/features/extract_features.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
 namespace ekf_slam {
@@ -37,6 +39,18 @@ struct PipelineOptions {
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
+  // Control source. With scan_matching.enabled every scan is first aligned to
+  // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
+  // the place of the raw odometry pose everywhere below: the filter's control
+  // is then the scan-matched increment, with scan_matched_motion_noise as its
+  // noise. Disabled: the raw odometry increment with filter.motion_noise
+  // (the thesis's mode).
+  ScanMatcherOptions scan_matching;
+  MotionNoiseOptions scan_matched_motion_noise = defaultScanMatchedMotionNoise();
+
+  // Noise of a scan-matched increment: a few millimetres and a tenth of a
+  // degree per step, growing slowly with the motion (docs/offline.md).
+  static MotionNoiseOptions defaultScanMatchedMotionNoise();
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -72,15 +86,17 @@ struct PipelineCounters {
   long matches = 0;
   long ambiguous = 0;  // between the gates, or lost to a better observation
   long new_landmarks = 0;
-  long pruned = 0;       // tentative landmarks removed
-  double nis_sum = 0.0;  // over all matches
+  long pruned = 0;               // tentative landmarks removed
+  long scan_matches = 0;         // scans aligned by the scan matcher
+  long scan_match_refusals = 0;  // scans that fell back to the odometry increment
+  double nis_sum = 0.0;          // over all matches
 };
 
 // One entry per scan, for the trajectory files and the smoother.
 struct ScanRecord {
   double stamp = 0.0;
   Pose2 filtered;      // the pose given for the scan when it was processed
-  Pose2 odometry;      // odom → base_link at the scan
+  Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
   int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
   Pose2 odometry_at_iteration;  // the odometry at that iteration
 };
@@ -90,6 +106,7 @@ class SlamPipeline {
   // Options must be valid (check validate()).
   explicit SlamPipeline(const PipelineOptions& options);
 
+  // `odometry` is the robot's raw odom → base_link at the scan's stamp.
   ScanResult processScan(const Scan& scan, const Pose2& odometry);
 
   const EkfSlam& filter() const { return filter_; }
@@ -111,6 +128,7 @@ class SlamPipeline {
   Pose2 deadReckoned(const Pose2& odometry) const;
 
   PipelineOptions options_;
+  std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   PipelineCounters counters_;
