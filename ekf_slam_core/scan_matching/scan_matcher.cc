@@ -27,6 +27,10 @@ std::string ScanMatcherOptions::validate() const {
   }
   if (!(max_correction_translation > 0.0)) return "max_correction_translation must be > 0 (m)";
   if (!(max_correction_rotation > 0.0)) return "max_correction_rotation must be > 0 (rad)";
+  if (map_mode != "local" && map_mode != "global") {
+    return "map_mode must be local or global, got " + map_mode;
+  }
+  if (!(map_point_spacing >= 0.0)) return "map_point_spacing must be >= 0 (m)";
   if (local_map_scans < 1) return "local_map_scans must be >= 1";
   if (!(keyscan_distance >= 0.0)) return "keyscan_distance must be >= 0 (m)";
   if (!(keyscan_angle >= 0.0)) return "keyscan_angle must be >= 0 (rad)";
@@ -91,12 +95,24 @@ void PointCloudReference::cellOf(const Vector2& p, int* ix, int* iy) const {
   *iy = static_cast<int>(std::floor(p.y() / cell_size_));
 }
 
+void PointCloudReference::addToGrid(int index) {
+  int ix, iy;
+  cellOf(points_[index], &ix, &iy);
+  grid_[key(ix, iy)].push_back(index);
+}
+
 void PointCloudReference::buildGrid() {
   grid_.clear();
-  for (int i = 0; i < static_cast<int>(points_.size()); ++i) {
-    int ix, iy;
-    cellOf(points_[i], &ix, &iy);
-    grid_[key(ix, iy)].push_back(i);
+  for (int i = 0; i < static_cast<int>(points_.size()); ++i) addToGrid(i);
+}
+
+void PointCloudReference::insert(const std::vector<Vector2>& points,
+                                 const std::vector<Vector2>& normals, double min_spacing) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (min_spacing > 0.0 && nearest(points[i], min_spacing) >= 0) continue;
+    points_.push_back(points[i]);
+    normals_.push_back(normals[i]);
+    addToGrid(static_cast<int>(points_.size()) - 1);
   }
 }
 
@@ -229,6 +245,19 @@ void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const 
   std::vector<Vector2> placed;
   placed.reserve(points.size());
   for (const Vector2& p : points) placed.push_back(transformFrom(pose, p));
+  ++counters_.key_scans;
+  last_key_pose_ = pose;
+  if (globalMap()) {
+    // Normals from the key scan's own points, then merged into the map.
+    const PointCloudReference scan(placed, options_.normal_radius,
+                                   options_.initial_correspondence_distance);
+    if (!reference_) {
+      reference_ = std::make_unique<PointCloudReference>(
+          std::vector<Vector2>(), options_.normal_radius, options_.initial_correspondence_distance);
+    }
+    reference_->insert(scan.points(), scan.normals(), options_.map_point_spacing);
+    return;
+  }
   key_scans_.push_back(std::move(placed));
   if (static_cast<int>(key_scans_.size()) > options_.local_map_scans) {
     key_scans_.erase(key_scans_.begin());
@@ -279,8 +308,10 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
   }
   if (match.ok) {
     ++counters_.matched;
+    consecutive_refusals_ = 0;
   } else {
     ++counters_.refused;
+    ++consecutive_refusals_;
   }
   last_raw_ = raw_odometry;
   last_corrected_ = corrected;
@@ -288,9 +319,15 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
   const Pose2 since_key = between(last_key_pose_, corrected);
   if (std::hypot(since_key.x, since_key.y) >= options_.keyscan_distance ||
       std::abs(since_key.theta) >= options_.keyscan_angle) {
-    // A refused match still joins the reference when the robot has moved:
-    // otherwise a long stretch of refusals would leave a stale local map.
-    addKeyScan(points, corrected);
+    // Local map: a refused match still joins the reference when the robot
+    // has moved, otherwise a long stretch of refusals would leave a stale
+    // reference. Global map: a scan placed by dead reckoning only would stay
+    // in the map for good, so only matched scans join it, unless the matches
+    // keep failing (the robot entered space the map does not cover).
+    constexpr int kRefusalsBeforeMapping = 3;
+    if (match.ok || !globalMap() || consecutive_refusals_ >= kRefusalsBeforeMapping) {
+      addKeyScan(points, corrected);
+    }
   }
   return corrected;
 }

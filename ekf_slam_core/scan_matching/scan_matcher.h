@@ -51,9 +51,17 @@ struct ScanMatcherOptions {
   double min_inlier_fraction = 0.4;         // of the scan's points within the final gate
   double max_correction_translation = 0.5;  // m: a larger change of the odometry guess is refused
   double max_correction_rotation = 0.35;    // rad: likewise for the heading (20 deg)
-  int local_map_scans = 8;                  // key scans kept as the reference
-  double keyscan_distance = 0.15;           // m of travel before the scan joins the reference …
-  double keyscan_angle = 0.1;               // rad … or this much turn
+  // Reference the scans are matched against: "local" = the last
+  // local_map_scans key scans (pure scan-matching odometry, drifts slowly);
+  // "global" = every key scan ever accepted, merged into one point map
+  // (points closer than map_point_spacing to a map point are not added), so
+  // a revisited place is matched against what was seen there before and the
+  // drift is pulled back (scan-to-map matching, as Hector SLAM does).
+  std::string map_mode = "global";
+  double map_point_spacing = 0.05;  // m: global map resolution
+  int local_map_scans = 8;          // key scans kept as the reference (local mode)
+  double keyscan_distance = 0.15;   // m of travel before the scan joins the reference …
+  double keyscan_angle = 0.1;       // rad … or this much turn
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -64,6 +72,11 @@ class PointCloudReference {
   // Points in one frame; normals are fitted from neighbours within `normal_radius`;
   // points with too few neighbours or no dominant direction are dropped.
   PointCloudReference(const std::vector<Vector2>& points, double normal_radius, double cell_size);
+
+  // Adds points with their normals; a point within `min_spacing` of an
+  // existing point is not added (the map does not grow on revisits).
+  void insert(const std::vector<Vector2>& points, const std::vector<Vector2>& normals,
+              double min_spacing);
 
   // Index of the nearest point within `max_distance` of p, or -1.
   int nearest(const Vector2& p, double max_distance) const;
@@ -76,6 +89,7 @@ class PointCloudReference {
   CellKey key(int ix, int iy) const;
   void cellOf(const Vector2& p, int* ix, int* iy) const;
   void buildGrid();
+  void addToGrid(int index);
 
   std::vector<Vector2> points_;
   std::vector<Vector2> normals_;
@@ -105,6 +119,7 @@ std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser
 struct ScanMatcherCounters {
   long matched = 0;
   long refused = 0;  // fell back to the odometry increment
+  long key_scans = 0;
 };
 
 // The front end used by the pipeline: keeps a local map of the last key
@@ -127,13 +142,16 @@ class ScanMatchingOdometry {
   }
 
   const ScanMatcherCounters& counters() const { return counters_; }
+  size_t mapPoints() const { return reference_ ? reference_->size() : 0; }
 
  private:
   void addKeyScan(const std::vector<Vector2>& points, const Pose2& pose);
+  bool globalMap() const { return options_.map_mode == "global"; }
 
   ScanMatcherOptions options_;
   ScanMatcherCounters counters_;
   bool initialised_ = false;
+  int consecutive_refusals_ = 0;
   Pose2 last_raw_;
   Pose2 last_corrected_;
   Pose2 last_key_pose_;

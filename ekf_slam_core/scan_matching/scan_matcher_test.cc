@@ -144,11 +144,15 @@ TEST(MatchPoints, RefusesWhenTooFewPointsPair) {
 // A drive around the cartons with odometry that under-reads distance by 5 %
 // and drifts 2 deg per metre to the left: the scan-matched track stays within
 // centimetres of the truth while the odometry ends decimetres away.
-TEST(ScanMatchingOdometry, CorrectsBiasedOdometryAlongADrive) {
+class BothMapModes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(BothMapModes, CorrectsBiasedOdometryAlongADrive) {
   std::mt19937 rng(21);
   const sim::PolygonWorld world = room();
   const Pose2 laser(0.1, 0.0, 0.0);
-  ScanMatchingOdometry matcher{ScanMatcherOptions()};
+  ScanMatcherOptions options;
+  options.map_mode = GetParam();
+  ScanMatchingOdometry matcher(options);
   Pose2 truth(-4.5, -2.8, 0.0), odometry = truth;
   double worst_matched = 0.0, final_odometry_error = 0.0;
   for (int k = 0; k < 300; ++k) {
@@ -168,6 +172,26 @@ TEST(ScanMatchingOdometry, CorrectsBiasedOdometryAlongADrive) {
   EXPECT_EQ(matcher.counters().refused, 0);
   EXPECT_GT(final_odometry_error, 0.3);
   EXPECT_LT(worst_matched, 0.08);
+}
+
+INSTANTIATE_TEST_SUITE_P(ScanMatchingOdometry, BothMapModes, ::testing::Values("local", "global"));
+
+// In the global map a place seen before is matched against the first visit:
+// after four laps the pose error is no larger than after the first.
+TEST(ScanMatchingOdometry, GlobalMapDoesNotGrowOnRevisits) {
+  std::mt19937 rng(4);
+  const sim::PolygonWorld world = room();
+  ScanMatchingOdometry matcher{ScanMatcherOptions()};
+  Pose2 truth(-4.0, 0.0, 0.0);
+  size_t after_first_lap = 0;
+  for (int k = 0; k < 4 * 72; ++k) {
+    matcher.process(sweep(world, truth, Pose2(), &rng), truth, Pose2());
+    if (k == 71) after_first_lap = matcher.mapPoints();
+    truth = compose(truth, Pose2(0.0, 0.0, 2.0 * kPi / 72));  // turning on the spot
+  }
+  EXPECT_GT(after_first_lap, 300u);
+  // Noise adds a few points where a new reading falls just beyond the spacing.
+  EXPECT_LT(matcher.mapPoints(), after_first_lap * 13 / 10);
 }
 
 TEST(ScanMatchingOdometry, AnEmptyScanFallsBackToTheOdometryIncrement) {
@@ -197,6 +221,9 @@ TEST(ScanMatcherOptions, ValidationNamesTheBadField) {
   o = ScanMatcherOptions();
   o.min_inlier_fraction = 1.5;
   EXPECT_NE(o.validate().find("min_inlier_fraction"), std::string::npos);
+  o = ScanMatcherOptions();
+  o.map_mode = "everything";
+  EXPECT_NE(o.validate().find("map_mode"), std::string::npos);
 }
 
 }  // namespace

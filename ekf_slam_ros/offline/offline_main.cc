@@ -149,6 +149,10 @@ int main(int argc, char** argv) {
     }
   }
 
+  // Whatever happens below, a report from an earlier run must not make this
+  // directory look complete: report.txt is removed first and written last.
+  ::unlink((out_dir + "/report.txt").c_str());
+
   const auto wall_start = std::chrono::steady_clock::now();
   ekf_slam::LogData log;
   const std::string input_error = bag_path.empty()
@@ -176,7 +180,6 @@ int main(int argc, char** argv) {
     std::cerr << "ekf_slam_offline: cannot create " << out_dir << "\n";
     return 3;
   }
-  ::unlink((out_dir + "/report.txt").c_str());  // a stale report would claim completeness
 
   ekf_slam::SlamPipeline pipeline(config.pipeline);
   const bool tty = ::isatty(STDERR_FILENO);
@@ -203,6 +206,12 @@ int main(int argc, char** argv) {
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_smoothed.txt", smoothed);
   if (error.empty())
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_odometry.txt", odometry);
+  if (error.empty() && config.pipeline.scan_matching.enabled) {
+    // The control source alone (scan-matched odometry, before the filter).
+    std::vector<ekf_slam::StampedPose> matched;
+    for (const ekf_slam::ScanRecord& r : pipeline.scans()) matched.push_back({r.stamp, r.odometry});
+    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_scan_matched.txt", matched);
+  }
   if (error.empty()) error = writeLandmarks(out_dir + "/landmarks.yaml", pipeline.filter());
   if (error.empty()) {
     error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, smoothed,
@@ -251,6 +260,13 @@ int main(int argc, char** argv) {
          << ", skipped (time not increasing): " << c.time_not_increasing
          << ", odometry jumps: " << c.odometry_jumps << ", bad input: " << c.bad_input
          << ", update failures: " << c.update_failures << "\n"
+         << "scan matching: "
+         << (config.pipeline.scan_matching.enabled
+                 ? std::to_string(c.scan_matches) + " scans matched, " +
+                       std::to_string(c.scan_match_refusals) +
+                       " fell back to the odometry increment"
+                 : std::string("off (raw odometry is the control)"))
+         << "\n"
          << "observations (landmark candidates): " << c.observations << " ("
          << (c.iterations ? static_cast<double>(c.observations) / c.iterations : 0.0)
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous

@@ -74,6 +74,8 @@ void bindScanMatching(YamlBinder b, PipelineOptions* p) {
   b.number("min_inlier_fraction", &s.min_inlier_fraction, 0.0, 1.0);
   b.number("max_correction_translation", &s.max_correction_translation, 1e-6, kHuge);
   b.number("max_correction_rotation", &s.max_correction_rotation, 1e-6, 2 * kPi);
+  b.text("map_mode", &s.map_mode, {"local", "global"});
+  b.number("map_point_spacing", &s.map_point_spacing, 0.0, 10.0);
   b.integer("local_map_scans", &s.local_map_scans, 1, 10000);
   b.number("keyscan_distance", &s.keyscan_distance, 0.0, kHuge);
   b.number("keyscan_angle", &s.keyscan_angle, 0.0, 2 * kPi);
