@@ -73,12 +73,17 @@ Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
   return compose(filter_.pose(), between(last_odometry_, odometry));
 }
 
-Pose2 SlamPipeline::mapToOdom() const { return compose(filter_.pose(), inverse(last_odometry_)); }
+// Against the robot's raw odometry frame (what odom → base_link on tf
+// carries), also when the control is scan-matched.
+Pose2 SlamPipeline::mapToOdom() const {
+  return compose(filter_.pose(), inverse(last_raw_odometry_));
+}
 
 ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry) {
   ++counters_.scans;
   // Below, `odometry` is the control source's pose: scan-matched or raw.
   Pose2 odometry = raw_odometry;
+  current_raw_odometry_ = raw_odometry;
   ScanResult out;
   auto record = [&]() {
     ScanRecord r;
@@ -122,6 +127,7 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
 
   if (!initialised_) {
     last_odometry_ = odometry;
+    last_raw_odometry_ = raw_odometry;
     last_stamp_ = scan.stamp;
     initialised_ = true;
     iterate(scan, odometry, /*predict=*/false, 0.0, &out);
@@ -174,6 +180,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
         out->outcome = ScanOutcome::kRejectedOdometryJump;
         message << "; odometry re-anchored, the increment is discarded";
         last_odometry_ = odometry;  // re-anchor: later increments start from here
+        last_raw_odometry_ = current_raw_odometry_;
         last_stamp_ = scan.stamp;
       } else {
         ++counters_.bad_input;
@@ -186,6 +193,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
     recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
   }
   last_odometry_ = odometry;
+  last_raw_odometry_ = current_raw_odometry_;
   last_stamp_ = scan.stamp;
 
   out->features = extractFeatures(scan, options_.features);

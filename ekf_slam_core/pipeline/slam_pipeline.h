@@ -115,7 +115,8 @@ class SlamPipeline {
   const std::vector<ScanRecord>& scans() const { return records_; }
   const TrajectoryRecorder& iterations() const { return recorder_; }
 
-  // map → odom, so that map → odom → base_link is the current estimate.
+  // map → odom, so that map → odom → base_link is the estimate at the last
+  // iteration, with odom → base_link the robot's raw odometry.
   Pose2 mapToOdom() const;
 
   // Poses for every scan, from the RTS-smoothed iterations (scans between
@@ -134,7 +135,9 @@ class SlamPipeline {
   PipelineCounters counters_;
   std::vector<ScanRecord> records_;
   bool initialised_ = false;
-  Pose2 last_odometry_;  // odometry at the last iteration (or re-anchor)
+  Pose2 last_odometry_;         // control-source pose at the last iteration (or re-anchor)
+  Pose2 last_raw_odometry_;     // the robot's raw odometry at that iteration
+  Pose2 current_raw_odometry_;  // the raw odometry of the scan being processed
   double last_stamp_ = 0.0;
   Pose2 latest_odometry_;  // odometry at the latest scan
 };

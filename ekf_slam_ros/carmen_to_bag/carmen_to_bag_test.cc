@@ -22,7 +22,8 @@ class CarmenFiles : public ::testing::Test {
   // A FLASER line of 180 beams, laser 0.1 m ahead of the robot.
   static std::string flaser(int i) {
     std::ostringstream line;
-    line.precision(10);
+    line.setf(std::ios::fixed);
+    line.precision(6);
     line << "FLASER 180";
     for (int b = 0; b < 180; ++b) {
       // Walls at a few metres, a "no return" every 17th beam.
@@ -47,7 +48,11 @@ TEST_F(CarmenFiles, RoundTripGivesBackTheSameScansOdometryAndMount) {
       out << "ODOM 0 0 0 0 0 0 " << 976052896.784 + 0.2 * i + 0.1 << " nuthaus 0.5\n";
     }
     // A stamp that goes backwards must keep its place in file order.
-    out << flaser(24).replace(flaser(24).find("976052901.584"), 13, "976052900.000") << "\n";
+    std::string late = flaser(24);
+    const std::string stamp = std::to_string(976052896.784 + 0.2 * 24).substr(0, 13);
+    ASSERT_NE(late.find(stamp), std::string::npos) << late;
+    late.replace(late.find(stamp), stamp.size(), "976052900.000");
+    out << late << "\n";
   }
   LogData from_log;
   ASSERT_EQ(readCarmen(log_, &from_log), "");
