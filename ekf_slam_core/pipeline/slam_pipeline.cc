@@ -36,6 +36,8 @@ std::string PipelineOptions::validate() const {
   if (!(min_travel_distance >= 0.0)) return "min_travel_distance must be >= 0 (m)";
   if (!(min_travel_angle >= 0.0)) return "min_travel_angle must be >= 0 (rad)";
   if (!(max_landmark_range > 0.0)) return "max_landmark_range must be > 0 (m)";
+  if (prune_min_observations < 0) return "prune_min_observations must be >= 0";
+  if (prune_age_steps < 1) return "prune_age_steps must be >= 1";
   error = scan_matching.validate();
   if (!error.empty()) return "scan_matching: " + error;
   error = scan_matched_motion_noise.validate();
@@ -213,6 +215,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   counters_.observations += static_cast<long>(out->observations.size());
   counters_.matches += static_cast<long>(out->iteration.matches.size());
   counters_.pruned += out->iteration.pruned;
+  counters_.pruned_rare += pruneRarelySeen();
   for (const ObservationAssociation& a : out->iteration.association.observations) {
     if (a.decision == AssociationDecision::kAmbiguous) ++counters_.ambiguous;
   }
@@ -220,6 +223,19 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   for (double nis : out->iteration.nis) counters_.nis_sum += nis;
   out->outcome = ScanOutcome::kIterated;
   out->pose = filter_.pose();
+}
+
+int SlamPipeline::pruneRarelySeen() {
+  if (options_.prune_min_observations <= 0) return 0;
+  std::vector<int> ids;
+  for (const LandmarkInfo& info : filter_.landmarks()) {
+    if (info.observations < options_.prune_min_observations &&
+        filter_.step() - info.created_step >= options_.prune_age_steps) {
+      ids.push_back(info.id);
+    }
+  }
+  for (int id : ids) filter_.removeLandmark(id);
+  return static_cast<int>(ids.size());
 }
 
 std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {

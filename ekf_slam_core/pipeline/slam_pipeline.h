@@ -39,6 +39,12 @@ struct PipelineOptions {
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
+  // Map management: a landmark matched fewer than prune_min_observations
+  // times (its creation included) once prune_age_steps iterations old is
+  // removed. Corners of people, chairs and doors that moved are seen a few
+  // times and never again, yet each costs O(n) per update forever.
+  int prune_min_observations = 4;  // 0: keep every landmark that survived tentative pruning
+  long prune_age_steps = 100;      // iterations a landmark has to gather its observations
   // Control source. With scan_matching.enabled every scan is first aligned to
   // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
   // the place of the raw odometry pose everywhere below: the filter's control
@@ -87,6 +93,7 @@ struct PipelineCounters {
   long ambiguous = 0;  // between the gates, or lost to a better observation
   long new_landmarks = 0;
   long pruned = 0;               // tentative landmarks removed
+  long pruned_rare = 0;          // landmarks removed by prune_min_observations
   long scan_matches = 0;         // scans aligned by the scan matcher
   long scan_match_refusals = 0;  // scans that fell back to the odometry increment
   double nis_sum = 0.0;          // over all matches
@@ -127,6 +134,7 @@ class SlamPipeline {
  private:
   void iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt, ScanResult* out);
   Pose2 deadReckoned(const Pose2& odometry) const;
+  int pruneRarelySeen();  // returns how many landmarks were removed
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled

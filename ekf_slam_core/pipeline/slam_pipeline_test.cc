@@ -131,6 +131,31 @@ TEST(SlamPipeline, ScanMatchedControlFollowsTheScansNotTheOdometry) {
   EXPECT_EQ(pipeline.counters().scan_match_refusals, 0);
 }
 
+// Map management: landmarks with too few sightings for their age go; the
+// well-seen ones stay.
+TEST(SlamPipeline, RarelySeenLandmarksArePrunedOnceOldEnough) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(3);
+  PipelineOptions options = defaultOptions(laser);
+  options.prune_min_observations = 15;
+  options.prune_age_steps = 10;
+  EXPECT_EQ(options.validate(), "");
+  SlamPipeline pipeline(options);
+  for (int i = 0; i <= 40; ++i) {
+    const Pose2 truth(0.05 * i, 0.0, 0.0);
+    pipeline.processScan(scanAt(world, compose(truth, laser), 0.1 * i, &rng), truth);
+  }
+  EXPECT_GT(pipeline.counters().pruned_rare, 0);
+  for (const LandmarkInfo& info : pipeline.filter().landmarks()) {
+    const bool young = pipeline.filter().step() - info.created_step < options.prune_age_steps;
+    EXPECT_TRUE(young || info.observations >= options.prune_min_observations)
+        << "landmark " << info.id << " seen " << info.observations << " times";
+  }
+  options.prune_age_steps = 0;
+  EXPECT_NE(options.validate().find("prune_age_steps"), std::string::npos);
+}
+
 TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {
   const sim::PolygonWorld world = cartonRoom();
   const Pose2 laser(0.1, 0.0, 0.0);

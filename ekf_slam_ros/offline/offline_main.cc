@@ -272,7 +272,8 @@ int main(int argc, char** argv) {
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous
          << ", new: " << c.new_landmarks << "\n"
          << "landmarks: " << pipeline.filter().landmarkCount() << " (" << c.new_landmarks
-         << " created, " << c.pruned << " pruned as seen once)"
+         << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
+         << " as seen rarely)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
