@@ -229,6 +229,9 @@ int main(int argc, char** argv) {
     std::cerr << "ekf_slam_offline: " << error << "\n";
     return 3;
   }
+  // Everything but the figures (drawn by a Python script in a child process).
+  const double processing =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (figures) {
     const std::string script = std::string(EKF_SLAM_SOURCE_DIR) + "/tools/plot_offline.py";
     const std::string command = "/usr/bin/python3 '" + script + "' '" + out_dir + "'";
@@ -277,7 +280,10 @@ int main(int argc, char** argv) {
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
-         << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n";
+         << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
+         << "processing: " << processing
+         << " s (reading, scan matching, SLAM, smoothing, trajectories and maps; the figures "
+            "excluded)\n";
   std::ofstream(out_dir + "/report.txt") << report.str();
   std::cout << report.str();
   return 0;
