@@ -8,6 +8,7 @@ WS    ?= $(ROOT)/.build/ws
 BENCH_WS ?= $(ROOT)/.build/bench_ws
 JOBS  ?= 2
 OUT   ?= $(ROOT)/output
+RVIZ  ?= 0
 
 # Debian's ROS tools live in /usr/bin; a pyenv python3 earlier on PATH lacks
 # the ROS modules.
@@ -38,7 +39,7 @@ test: build check
 	@tools/run_tests.sh $(WS)
 
 demo: build
-	@source $(WS)/devel/setup.bash && tools/run_demo.sh $(OUT)
+	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/run_demo.sh $(OUT)
 
 bench: deps
 	@mkdir -p $(BENCH_WS)/src $(OUT)/bench

@@ -16,6 +16,8 @@ PACKAGES=(
   libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
   # figures
   python3-matplotlib python3-numpy python3-yaml
+  # rviz (sim.launch rviz:=true) and its headless smoke test / screenshot
+  rviz xvfb x11-apps
 )
 
 missing=()

@@ -147,6 +147,12 @@ std::string AssociationOptions::validate() const {
   }
   if (jcbb_max_nodes < 1) return "jcbb_max_nodes must be >= 1";
   if (max_candidates_reported < 0) return "max_candidates_reported must be >= 0";
+  if (!(merge_probability >= 0.0 && merge_probability < 1.0)) {
+    return "merge_probability must be in [0, 1) (0: no merging)";
+  }
+  if (!(merge_distance >= 0.0 && std::isfinite(merge_distance))) {
+    return "merge_distance must be finite and >= 0 (m)";
+  }
   return "";
 }
 

@@ -28,6 +28,14 @@ struct AssociationOptions {
   double new_landmark_probability = 0.99999;  // beyond this gate: new landmark
   int jcbb_max_nodes = 20000;                 // search budget; best so far when exhausted
   int max_candidates_reported = 5;            // per observation, for the report
+  // Duplicate landmarks: after each update, a landmark that was matched or
+  // created is merged with any other within merge_distance (m) whose
+  // difference the joint covariance puts at zero with this probability
+  // (χ²₂ quantile of the squared Mahalanobis distance). A corner re-seen
+  // with a drifted pose outside the new-landmark gate becomes a second
+  // landmark; after the loop closes the two converge and are merged. 0: off.
+  double merge_probability = 0.95;
+  double merge_distance = 0.5;
 
   std::string validate() const;
 };

@@ -35,6 +35,10 @@ const char* toString(FilterStatus status) {
       return "unknown landmark";
     case FilterStatus::kBadObservation:
       return "observation undefined (landmark at sensor origin)";
+    case FilterStatus::kMappingDisabled:
+      return "new landmarks disabled (localisation only)";
+    case FilterStatus::kDuplicateLandmark:
+      return "a landmark with this id exists";
   }
   return "unknown status";
 }
@@ -224,6 +228,7 @@ void EkfSlam::mirrorLowerToUpper() {
 }
 
 FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) {
+  if (!mapping_enabled_) return FilterStatus::kMappingDisabled;
   if (!std::isfinite(observation.z.range) || !std::isfinite(observation.z.bearing)) {
     return FilterStatus::kNonFiniteInput;
   }
@@ -256,6 +261,32 @@ FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) 
   return FilterStatus::kOk;
 }
 
+FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2& covariance,
+                                  int observations) {
+  if (!position.allFinite() || !covariance.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(covariance)) return FilterStatus::kSingularInnovation;
+  if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
+  const int n = dim_;
+  reserve(n + kLandmarkDim);
+  // A prior map is known independently of where the robot is now: the new
+  // rows and columns carry no correlation with the pose or other landmarks.
+  x_.segment<2>(n) = position;
+  P_.block(n, 0, 2, n).setZero();
+  P_.block(0, n, n, 2).setZero();
+  P_.block<2, 2>(n, n) = 0.5 * (covariance + covariance.transpose());
+  dim_ = n + kLandmarkDim;
+
+  LandmarkInfo info;
+  info.id = id;
+  info.observations = std::max(1, observations);
+  info.created_step = step_;
+  info.last_seen_step = step_;
+  slot_of_id_[id] = landmarkCount();
+  landmarks_.push_back(info);
+  next_id_ = std::max(next_id_, id + 1);
+  return FilterStatus::kOk;
+}
+
 int EkfSlam::pruneTentative() {
   if (options_.tentative_max_age <= 0) return 0;
   std::vector<int> slots;
@@ -267,6 +298,67 @@ int EkfSlam::pruneTentative() {
   }
   removeSlots(slots);
   return static_cast<int>(slots.size());
+}
+
+FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate) {
+  const int a = slotOf(keep_id), b = slotOf(drop_id);
+  if (a < 0 || b < 0 || a == b) return FilterStatus::kUnknownLandmark;
+  const int n = dim_;
+  const int ia = landmarkIndex(a), ib = landmarkIndex(b);
+  auto P = P_.topLeftCorner(n, n);
+  // H = [… I … −I …] picks x_a − x_b; P Hᵀ and S = H P Hᵀ are column blocks.
+  const Eigen::MatrixXd PHt = P.middleCols<2>(ia) - P.middleCols<2>(ib);  // n × 2
+  Matrix2 S = PHt.middleRows<2>(ia) - PHt.middleRows<2>(ib);
+  S = 0.5 * (S + S.transpose()).eval();
+  const Vector2 difference = x_.segment<2>(ia) - x_.segment<2>(ib);
+  const Eigen::LLT<Matrix2> llt(S);
+  if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
+    return FilterStatus::kSingularInnovation;
+  }
+  if (!(difference.dot(llt.solve(difference)) < gate)) return FilterStatus::kBadObservation;
+  // Condition on x_a − x_b = 0: x −= W L⁻¹ d, P −= W Wᵀ with W = P Hᵀ L⁻ᵀ.
+  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // 2 × n
+  const Vector2 whitened = llt.matrixL().solve(difference);
+  x_.head(n).noalias() -= Wt.transpose() * whitened;
+  x_(2) = wrapAngle(x_(2));
+  P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
+  mirrorLowerToUpper();
+  LandmarkInfo& kept = landmarks_[a];
+  const LandmarkInfo& dropped = landmarks_[b];
+  kept.observations += dropped.observations;
+  kept.last_seen_step = std::max(kept.last_seen_step, dropped.last_seen_step);
+  removeSlots({b});
+  return FilterStatus::kOk;
+}
+
+std::vector<std::pair<int, int>> EkfSlam::mergeDuplicates(const std::vector<int>& ids, double gate,
+                                                          double max_distance) {
+  std::vector<std::pair<int, int>> merged;
+  for (int id : ids) {
+    bool again = true;
+    while (again) {  // a landmark may have several twins
+      again = false;
+      const int slot = slotOf(id);
+      if (slot < 0) break;  // merged away already
+      const Vector2 position = landmarkPosition(slot);
+      for (int other = 0; other < landmarkCount(); ++other) {
+        if (other == slot) continue;
+        if ((landmarkPosition(other) - position).squaredNorm() > max_distance * max_distance) {
+          continue;
+        }
+        // Keep the older landmark (smaller id: created first).
+        const int other_id = landmarks_[other].id;
+        const int keep = std::min(id, other_id), drop = std::max(id, other_id);
+        if (mergeLandmarks(keep, drop, gate) == FilterStatus::kOk) {
+          merged.emplace_back(keep, drop);
+          id = keep;
+          again = true;
+          break;
+        }
+      }
+    }
+  }
+  return merged;
 }
 
 bool EkfSlam::removeLandmark(int id) {

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/filter/filter_status.h"
@@ -94,6 +95,35 @@ class EkfSlam {
   int pruneTentative();
   bool removeLandmark(int id);
 
+  // Two landmarks that are one: the joint covariance says their difference is
+  // zero within the gate (squared Mahalanobis distance of x_a − x_b under
+  // P_aa + P_bb − P_ab − P_ba below `gate`). Fuses them by conditioning the
+  // whole state on x_a = x_b (an exact constraint, so nothing either held is
+  // lost), then removes `drop_id`; `keep_id` gains its sightings.
+  // kUnknownLandmark for a missing id, kBadObservation when the two are
+  // farther apart than the gate allows (nothing changes then),
+  // kSingularInnovation when the difference covariance is not positive.
+  FilterStatus mergeLandmarks(int keep_id, int drop_id, double gate);
+
+  // Checks each landmark of `ids` against every landmark within
+  // `max_distance` (m) and merges pairs that are one (mergeLandmarks with
+  // `gate`), keeping the older landmark. Returns the (kept, dropped) pairs.
+  std::vector<std::pair<int, int>> mergeDuplicates(const std::vector<int>& ids, double gate,
+                                                   double max_distance);
+
+  // Seeds a landmark from a prior map (e.g. one saved earlier): mean and
+  // covariance in the map frame, uncorrelated with the pose and the other
+  // landmarks. Keeps `id` (later landmarks get larger ids). Refused with
+  // kDuplicateLandmark when the id exists, kSingularInnovation when the
+  // covariance is not symmetric positive definite.
+  FilterStatus addLandmark(int id, const Vector2& position, const Matrix2& covariance,
+                           int observations = 2);
+
+  // Localisation only when false: augment() refuses (kMappingDisabled), so
+  // the map keeps its landmarks and gains none. On by default.
+  void setMappingEnabled(bool enabled) { mapping_enabled_ = enabled; }
+  bool mappingEnabled() const { return mapping_enabled_; }
+
   Pose2 pose() const { return Pose2(x_(0), x_(1), x_(2)); }
   Matrix3 poseCovariance() const { return P_.topLeftCorner<3, 3>(); }
   int landmarkCount() const { return static_cast<int>(landmarks_.size()); }
@@ -130,6 +160,7 @@ class EkfSlam {
   int next_id_ = 0;
   long step_ = 0;
   Matrix3 last_F_ = Matrix3::Identity();
+  bool mapping_enabled_ = true;
 };
 
 }  // namespace ekf_slam

@@ -262,6 +262,67 @@ TEST(EkfSlam, RemovingTheNewestLandmarkNeedsNoCopyAndKeepsTheRest) {
   EXPECT_EQ(filter.stateDim(), 11);
 }
 
+// A corner seen a second time outside the new-landmark gate becomes a twin.
+// Merging conditions the state on "the two are one point" — the textbook
+// constrained update x − P Hᵀ(H P Hᵀ)⁻¹ H x, P − P Hᵀ(H P Hᵀ)⁻¹ H P with
+// H = [.. I .. −I ..] — and then drops the twin's rows and columns.
+TEST(EkfSlam, MergingTwinLandmarksIsTheConstrainedUpdate) {
+  EkfSlam filter = builtFilter();
+  int twin = -1;
+  // Landmark 0 re-observed from the same pose: the twin sits next to it.
+  ASSERT_EQ(filter.augment(observation(1.76, 0.335), &twin), FilterStatus::kOk);
+  const int original = filter.landmarks()[0].id;
+  const int observations = filter.landmarks()[0].observations;
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  const int n = filter.stateDim();
+  MatrixXd H = MatrixXd::Zero(2, n);
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
+  const MatrixXd K = P * H.transpose() * (H * P * H.transpose()).inverse();
+  VectorXd x_expected = x - K * (H * x);
+  MatrixXd P_expected = P - K * H * P;
+
+  ASSERT_EQ(filter.mergeLandmarks(original, twin, 9.21), FilterStatus::kOk);
+  EXPECT_EQ(filter.slotOf(twin), -1);
+  EXPECT_EQ(filter.stateDim(), n - 2);
+  EXPECT_EQ(filter.landmarks()[0].observations, observations + 1);
+  std::vector<int> keep;
+  for (int i = 0; i < n - 2; ++i) keep.push_back(i);  // the twin was the newest
+  EXPECT_LT((filter.state() - x_expected(keep)).norm(), 1e-12);
+  EXPECT_LT((filter.covariance() - P_expected(keep, keep)).norm(), 1e-12);
+  // The merged landmark is known at least as well as either was.
+  const Matrix2 before = P.block<2, 2>(3, 3), after = filter.landmarkCovariance(0);
+  EXPECT_GE((before - after).eigenvalues().real().minCoeff(), -1e-15);
+}
+
+TEST(EkfSlam, DistinctLandmarksAreNotMergedAndNothingChanges) {
+  EkfSlam filter = builtFilter();
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  const int a = filter.landmarks()[0].id, b = filter.landmarks()[1].id;
+  EXPECT_EQ(filter.mergeLandmarks(a, b, 9.21), FilterStatus::kBadObservation);
+  EXPECT_EQ(filter.mergeLandmarks(a, 12345, 9.21), FilterStatus::kUnknownLandmark);
+  EXPECT_EQ(filter.mergeLandmarks(a, a, 9.21), FilterStatus::kUnknownLandmark);
+  EXPECT_TRUE(filter.mergeDuplicates({a, b}, 9.21, 10.0).empty());
+  EXPECT_EQ(filter.covariance(), P);
+  EXPECT_EQ(filter.state(), x);
+}
+
+TEST(EkfSlam, MergeDuplicatesKeepsTheOlderLandmark) {
+  EkfSlam filter = builtFilter();
+  int twin = -1;
+  ASSERT_EQ(filter.augment(observation(1.76, 0.335), &twin), FilterStatus::kOk);
+  const int count = filter.landmarkCount();
+  // Too far apart for max_distance: not even tested.
+  EXPECT_TRUE(filter.mergeDuplicates({twin}, 9.21, 0.001).empty());
+  const auto merged = filter.mergeDuplicates({twin}, 9.21, 0.5);
+  ASSERT_EQ(merged.size(), 1u);
+  EXPECT_EQ(merged[0].first, filter.landmarks()[0].id);
+  EXPECT_EQ(merged[0].second, twin);
+  EXPECT_EQ(filter.landmarkCount(), count - 1);
+}
+
 TEST(EkfSlam, OptionsValidationNamesTheField) {
   FilterOptions options;
   EXPECT_EQ(options.validate(), "");

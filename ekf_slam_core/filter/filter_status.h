@@ -12,6 +12,8 @@ enum class FilterStatus {
   kSingularInnovation,  // innovation covariance not positive definite
   kUnknownLandmark,     // an association names a landmark not in the state
   kBadObservation,      // e.g. a landmark at the sensor origin
+  kMappingDisabled,     // augment refused: the filter localises only (setMappingEnabled)
+  kDuplicateLandmark,   // addLandmark with an id already in the map
 };
 
 const char* toString(FilterStatus status);

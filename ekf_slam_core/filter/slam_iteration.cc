@@ -1,5 +1,7 @@
 #include "ekf_slam_core/filter/slam_iteration.h"
 
+#include "ekf_slam_core/filter/chi_square.h"
+
 namespace ekf_slam {
 
 IterationReport runIteration(EkfSlam& filter, const AssociationOptions& association,
@@ -32,6 +34,12 @@ void observe(EkfSlam& filter, const AssociationOptions& association,
     }
   }
   report.pruned = filter.pruneTentative();
+  if (association.merge_probability > 0.0) {
+    std::vector<int> touched = report.new_landmark_ids;
+    for (const PointMatch& m : report.matches) touched.push_back(m.landmark_id);
+    report.merged = filter.mergeDuplicates(
+        touched, chiSquareQuantile(association.merge_probability, 2.0), association.merge_distance);
+  }
 }
 
 }  // namespace ekf_slam

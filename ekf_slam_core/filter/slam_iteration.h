@@ -4,6 +4,7 @@
 // the live node, the offline runner, the demo and the benchmarks.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/filter/data_association.h"
@@ -16,10 +17,11 @@ struct IterationReport {
   FilterStatus update_status = FilterStatus::kOk;
   AssociationResult association;
   std::vector<PointMatch> matches;
-  std::vector<double> nis;            // per match, same order
-  std::vector<int> new_landmark_ids;  // landmarks added this iteration
-  int augment_failures = 0;           // new-landmark observations refused
-  int pruned = 0;                     // tentative landmarks removed
+  std::vector<double> nis;                  // per match, same order
+  std::vector<int> new_landmark_ids;        // landmarks added this iteration
+  int augment_failures = 0;                 // new-landmark observations refused
+  int pruned = 0;                           // tentative landmarks removed
+  std::vector<std::pair<int, int>> merged;  // duplicate landmarks fused: (kept id, dropped id)
 
   bool ok() const {
     return predict_status == FilterStatus::kOk && update_status == FilterStatus::kOk;

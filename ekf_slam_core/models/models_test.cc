@@ -105,6 +105,35 @@ TEST(OdometryMotionModel, NoiseGrowsWithMotionAndValidates) {
   EXPECT_NE(noise.validate().find("trans_per_trans"), std::string::npos);
 }
 
+// The random-walk terms give a drive the same variance however many filter
+// steps it is cut into (the quadratic terms do not), and split the heading
+// diffusion evenly over the two rotations.
+TEST(OdometryMotionModel, RandomWalkNoiseDoesNotDependOnTheStepCount) {
+  MotionNoiseOptions noise{0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  noise.rot_per_metre = 4e-4;
+  noise.trans_per_metre = 1e-4;
+  noise.rot_per_radian = 2e-3;
+  EXPECT_EQ(noise.validate(), "");
+  // A straight 1 m drive in 1 step and in 25 steps of 4 cm.
+  const Matrix3 one = controlCovariance({0.0, 1.0, 0.0}, noise);
+  Matrix3 many = Matrix3::Zero();
+  for (int k = 0; k < 25; ++k) many += controlCovariance({0.0, 0.04, 0.0}, noise);
+  EXPECT_TRUE(one.isApprox(many, 1e-12));
+  EXPECT_NEAR(one(0, 0) + one(2, 2), 4e-4, 1e-15);
+  EXPECT_NEAR(one(1, 1), 1e-4, 1e-15);
+  // Driving backwards diffuses as much as driving forwards; a turn on the spot
+  // by its angle.
+  EXPECT_TRUE(controlCovariance({0.0, -1.0, 0.0}, noise).isApprox(one, 1e-12));
+  EXPECT_NEAR(controlCovariance({0.0, 0.0, -0.5}, noise)(2, 2), 1e-3, 1e-15);
+  // The thesis's quadratic terms do depend on the step count.
+  MotionNoiseOptions quadratic;
+  Matrix3 quadratic_many = Matrix3::Zero();
+  for (int k = 0; k < 25; ++k) quadratic_many += controlCovariance({0.0, 0.04, 0.0}, quadratic);
+  EXPECT_LT(quadratic_many(1, 1), 0.1 * controlCovariance({0.0, 1.0, 0.0}, quadratic)(1, 1));
+  noise.rot_per_metre = -1.0;
+  EXPECT_NE(noise.validate().find("rot_per_metre"), std::string::npos);
+}
+
 struct ObservationCase {
   Pose2 robot;
   Pose2 laser;

@@ -24,7 +24,9 @@ std::string MotionNoiseOptions::validate() const {
     double value;
   } fields[] = {{"rot_per_rot", rot_per_rot},         {"rot_per_trans", rot_per_trans},
                 {"trans_per_trans", trans_per_trans}, {"trans_per_rot", trans_per_rot},
-                {"min_rot_sigma", min_rot_sigma},     {"min_trans_sigma", min_trans_sigma}};
+                {"min_rot_sigma", min_rot_sigma},     {"min_trans_sigma", min_trans_sigma},
+                {"rot_per_metre", rot_per_metre},     {"trans_per_metre", trans_per_metre},
+                {"rot_per_radian", rot_per_radian}};
   for (const auto& field : fields) {
     if (!std::isfinite(field.value) || field.value < 0.0) {
       return std::string("motion noise '") + field.name + "' must be finite and >= 0, got " +
@@ -80,6 +82,12 @@ Matrix3 controlCovariance(const OdometryControl& u, const MotionNoiseOptions& no
             noise.min_trans_sigma * noise.min_trans_sigma;
   q(2, 2) =
       noise.rot_per_rot * r2 + noise.rot_per_trans * t2 + noise.min_rot_sigma * noise.min_rot_sigma;
+  // Random walk: the heading diffuses along the drive, half of it before and
+  // half after the translation in the rotate–translate–rotate split.
+  const double distance = std::abs(u.trans);
+  q(0, 0) += 0.5 * noise.rot_per_metre * distance + noise.rot_per_radian * std::abs(u.rot1);
+  q(1, 1) += noise.trans_per_metre * distance;
+  q(2, 2) += 0.5 * noise.rot_per_metre * distance + noise.rot_per_radian * std::abs(u.rot2);
   return q;
 }
 

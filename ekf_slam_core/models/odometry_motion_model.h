@@ -51,6 +51,16 @@ struct MotionNoiseOptions {
   double trans_per_rot = 0.0001;  // m²/rad²:   translation variance per squared rotation
   double min_rot_sigma = 0.0;     // rad: floor added in quadrature to each rotation
   double min_trans_sigma = 0.0;   // m:   floor added in quadrature to the translation
+  // Random-walk terms: variance linear in the motion. Wheel slip and encoder
+  // quantisation add independent errors along the way, so the error of a
+  // drive of length d has variance ∝ d, whatever the number of filter steps
+  // it is cut into. The quadratic terms above (thesis §3.4.2) instead give a
+  // drive cut into N steps 1/N of the variance of the same drive in one step,
+  // so a filter iterating at every scan would trust the odometry too much.
+  double rot_per_metre =
+      0.0;  // rad²/m:   heading variance per metre driven (split over rot1, rot2)
+  double trans_per_metre = 0.0;  // m²/m:     translation variance per metre driven
+  double rot_per_radian = 0.0;   // rad²/rad: rotation variance per radian turned
 
   // Empty when valid, else a message naming the bad field.
   std::string validate() const;

@@ -117,6 +117,9 @@ class SlamPipeline {
   ScanResult processScan(const Scan& scan, const Pose2& odometry);
 
   const EkfSlam& filter() const { return filter_; }
+  // For seeding a prior map (EkfSlam::addLandmark) and switching to
+  // localisation only, before or between scans; not during processScan.
+  EkfSlam& mutableFilter() { return filter_; }
   const PipelineOptions& options() const { return options_; }
   const PipelineCounters& counters() const { return counters_; }
   const std::vector<ScanRecord>& scans() const { return records_; }

@@ -118,6 +118,8 @@ int main(int argc, char** argv) {
   bool figures = true;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
+    // roslaunch appends __name:=… and __log:=…; remappings mean nothing here.
+    if (arg.rfind("__", 0) == 0 && arg.find(":=") != std::string::npos) continue;
     if (arg == "--bag" && i + 1 < argc) {
       bag_path = argv[++i];
     } else if (arg == "--carmen" && i + 1 < argc) {

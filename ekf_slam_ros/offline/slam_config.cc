@@ -39,6 +39,9 @@ void bindMotionNoise(YamlBinder noise, MotionNoiseOptions* n) {
   noise.number("trans_per_rot", &n->trans_per_rot, 0.0, kHuge);
   noise.number("min_rot_sigma", &n->min_rot_sigma, 0.0, kHuge);
   noise.number("min_trans_sigma", &n->min_trans_sigma, 0.0, kHuge);
+  noise.number("rot_per_metre", &n->rot_per_metre, 0.0, kHuge);
+  noise.number("trans_per_metre", &n->trans_per_metre, 0.0, kHuge);
+  noise.number("rot_per_radian", &n->rot_per_radian, 0.0, kHuge);
   noise.rejectUnknownKeys();
 }
 
@@ -90,6 +93,8 @@ void bindAssociation(YamlBinder b, AssociationOptions* a) {
                                : AssociationMethod::kNearestNeighbour;
   b.number("gate_probability", &a->gate_probability, 1e-9, 1.0 - 1e-12);
   b.number("new_landmark_probability", &a->new_landmark_probability, 1e-9, 1.0 - 1e-12);
+  b.number("merge_probability", &a->merge_probability, 0.0, 1.0 - 1e-12);
+  b.number("merge_distance", &a->merge_distance, 0.0, 1e3);
   b.integer("jcbb_max_nodes", &a->jcbb_max_nodes, 1, 100000000);
   b.rejectUnknownKeys();
 }

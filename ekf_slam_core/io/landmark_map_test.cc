@@ -1,0 +1,165 @@
+// Landmark map files: exact round trip, the offline runner's 3-value form,
+// errors that name the line, and seeding a filter from a saved map.
+#include "ekf_slam_core/io/landmark_map.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <random>
+
+#include "ekf_slam_core/filter/ekf_slam.h"
+
+namespace ekf_slam {
+namespace {
+
+LandmarkMapFile randomMap(int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> coordinate(-50.0, 50.0), scale(1e-6, 0.5);
+  LandmarkMapFile map;
+  for (int i = 0; i < count; ++i) {
+    LandmarkRecord r;
+    r.id = 3 * i + 1;  // gaps, as after pruning
+    r.position = Vector2(coordinate(rng), coordinate(rng));
+    Eigen::Matrix2d a;
+    a << scale(rng), scale(rng), scale(rng), scale(rng);
+    r.covariance = a * a.transpose() + 1e-9 * Matrix2::Identity();  // SPD
+    r.observations = 1 + i % 5;
+    map.landmarks.push_back(r);
+  }
+  return map;
+}
+
+TEST(LandmarkMapFile, RoundTripThroughAFileIsExact) {
+  const LandmarkMapFile original = randomMap(40, 7);
+  char path[] = "/tmp/landmark_map_testXXXXXX";
+  const int fd = ::mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ::close(fd);
+  ASSERT_EQ(writeLandmarkMap(path, original), "");
+  LandmarkMapFile read;
+  ASSERT_EQ(readLandmarkMap(path, &read), "");
+  std::remove(path);
+  EXPECT_EQ(read.frame, "map");
+  ASSERT_EQ(read.landmarks.size(), original.landmarks.size());
+  for (size_t i = 0; i < read.landmarks.size(); ++i) {
+    EXPECT_EQ(read.landmarks[i].id, original.landmarks[i].id);
+    EXPECT_EQ(read.landmarks[i].position, original.landmarks[i].position);  // bit-exact
+    EXPECT_EQ(read.landmarks[i].covariance, original.landmarks[i].covariance);
+    EXPECT_EQ(read.landmarks[i].observations, original.landmarks[i].observations);
+  }
+}
+
+TEST(LandmarkMapFile, EmptyMapRoundTrips) {
+  LandmarkMapFile empty, read;
+  empty.frame = "world";
+  read.landmarks.resize(3);
+  ASSERT_EQ(parseLandmarkMap(formatLandmarkMap(empty), "text", &read), "");
+  EXPECT_EQ(read.frame, "world");
+  EXPECT_TRUE(read.landmarks.empty());
+}
+
+TEST(LandmarkMapFile, ReadsTheOfflineRunnersThreeValueCovariance) {
+  const std::string text =
+      "# EKF-SLAM point landmarks\n"
+      "landmarks:\n"
+      "  - {id: 4, x: 1.5, y: -2, covariance: [0.04, 0.01, 0.09], observations: 6}\n"
+      "  - {id: 9, x: 0, y: 3.25, covariance: [0.01, 0, 0.01]}\n";
+  LandmarkMapFile map;
+  ASSERT_EQ(parseLandmarkMap(text, "offline.yaml", &map), "");
+  ASSERT_EQ(map.landmarks.size(), 2u);
+  EXPECT_EQ(map.landmarks[0].id, 4);
+  EXPECT_DOUBLE_EQ(map.landmarks[0].position.y(), -2.0);
+  EXPECT_DOUBLE_EQ(map.landmarks[0].covariance(1, 0), 0.01);
+  EXPECT_DOUBLE_EQ(map.landmarks[0].covariance(1, 1), 0.09);
+  EXPECT_EQ(map.landmarks[0].observations, 6);
+  EXPECT_EQ(map.landmarks[1].observations, 2);  // absent: not tentative
+}
+
+TEST(LandmarkMapFile, ErrorsNameTheLineAndTheProblemAndLeaveTheMapAlone) {
+  const std::string head = "landmarks:\n";
+  struct Case {
+    std::string entry;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"  - {id: 1, x: 0, y: 0, covariance: [1, 0, 0, -1]}\n", "not positive definite"},
+      {"  - {id: 1, x: 0, y: 0, covariance: [1, 0.5, 0, 1]}\n", "not symmetric"},
+      {"  - {id: 1, x: nan, y: 0, covariance: [1, 0, 0, 1]}\n", "x must be a finite number"},
+      {"  - {id: -2, x: 0, y: 0, covariance: [1, 0, 0, 1]}\n", "id must be"},
+      {"  - {id: 1, x: 0, covariance: [1, 0, 0, 1]}\n", "missing key 'y'"},
+      {"  - {id: 1, x: 0, y: 0, z: 1, covariance: [1, 0, 0, 1]}\n", "unknown key 'z'"},
+      {"  - {id: 1, x: 0, y: 0, covariance: [1, 0]}\n", "covariance needs 4 values"},
+      {"  - {id: 1, x: 0, y: 0, covariance: [1, 0, 0, 1]}\n"
+       "  - {id: 1, x: 2, y: 0, covariance: [1, 0, 0, 1]}\n",
+       "id 1 appears twice"},
+  };
+  for (const Case& c : cases) {
+    LandmarkMapFile map = randomMap(2, 1);
+    const std::string error = parseLandmarkMap(head + c.entry, "bad.yaml", &map);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.entry << " → " << error;
+    EXPECT_EQ(error.rfind("bad.yaml:", 0), 0u) << error;
+    EXPECT_EQ(map.landmarks.size(), 2u);  // untouched
+  }
+  LandmarkMapFile map;
+  EXPECT_NE(parseLandmarkMap("frame: map\n", "f", &map).find("no 'landmarks:' list"),
+            std::string::npos);
+  EXPECT_NE(parseLandmarkMap("landmarks:\ncolour: red\n", "f", &map).find("f:2: unknown key"),
+            std::string::npos);
+  EXPECT_NE(readLandmarkMap("/nonexistent/dir/map.yaml", &map).find("cannot open"),
+            std::string::npos);
+}
+
+TEST(SeedingTheFilter, LoadedLandmarksKeepIdsMeansCovariancesAndAreUncorrelated) {
+  FilterOptions options;
+  EkfSlam filter(options, Pose2(1.0, 2.0, 0.3), Matrix3::Identity() * 0.01);
+  const LandmarkMapFile map = randomMap(5, 3);
+  for (const LandmarkRecord& r : map.landmarks) {
+    ASSERT_EQ(filter.addLandmark(r.id, r.position, r.covariance, r.observations),
+              FilterStatus::kOk);
+  }
+  ASSERT_EQ(filter.landmarkCount(), 5);
+  for (int s = 0; s < 5; ++s) {
+    EXPECT_EQ(filter.landmarks()[s].id, map.landmarks[s].id);
+    EXPECT_EQ(filter.landmarkPosition(s), map.landmarks[s].position);
+    EXPECT_TRUE(filter.landmarkCovariance(s).isApprox(map.landmarks[s].covariance, 1e-15));
+    // No correlation with the pose or any other landmark.
+    const int row = EkfSlam::landmarkIndex(s);
+    EXPECT_EQ(filter.covariance().block(row, 0, 2, row).norm(), 0.0);
+  }
+  EXPECT_TRUE(filter.poseCovariance().isApprox(Matrix3::Identity() * 0.01));
+
+  // Refusals leave the state alone.
+  const int dim = filter.stateDim();
+  EXPECT_EQ(filter.addLandmark(map.landmarks[0].id, Vector2(0, 0), Matrix2::Identity()),
+            FilterStatus::kDuplicateLandmark);
+  EXPECT_EQ(filter.addLandmark(100, Vector2(0, 0), -Matrix2::Identity()),
+            FilterStatus::kSingularInnovation);
+  EXPECT_EQ(filter.addLandmark(100, Vector2(NAN, 0), Matrix2::Identity()),
+            FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.stateDim(), dim);
+
+  // A landmark found later gets an id above every loaded one.
+  PointObservation z;
+  z.z = {2.0, 0.1};
+  z.covariance = Matrix2::Identity() * 1e-4;
+  int id = -1;
+  ASSERT_EQ(filter.augment(z, &id), FilterStatus::kOk);
+  EXPECT_GT(id, map.landmarks.back().id);
+}
+
+TEST(SeedingTheFilter, LocalisationOnlyRefusesNewLandmarks) {
+  EkfSlam filter(FilterOptions{});
+  PointObservation z;
+  z.z = {2.0, 0.1};
+  z.covariance = Matrix2::Identity() * 1e-4;
+  filter.setMappingEnabled(false);
+  EXPECT_EQ(filter.augment(z), FilterStatus::kMappingDisabled);
+  EXPECT_EQ(filter.landmarkCount(), 0);
+  filter.setMappingEnabled(true);
+  EXPECT_EQ(filter.augment(z), FilterStatus::kOk);
+  EXPECT_EQ(filter.landmarkCount(), 1);
+}
+
+}  // namespace
+}  // namespace ekf_slam

@@ -1,0 +1,173 @@
+// simulator_node: a simulated P3-DX with an LMS200 in a world image, behind
+// two pseudo-terminals, so that the real driver nodes run unchanged: the
+// same graph as on the robot, only the serial ports differ.
+//
+// One process, one world, one true pose: the P3-DX emulator drives the true
+// pose (blocked by the walls through a motion hook with the robot radius);
+// the LMS200 emulator ray-casts from the laser pose = true pose ∘ mount,
+// the mount read from config/calibration.yaml (the file the SLAM side's tf
+// comes from). Both are stepped on one monotonic clock; the loop sleeps to
+// the next deadline.
+//
+// Publishes the ground truth (docs/simulation.md):
+//   ground_truth/odom   nav_msgs/Odometry, frame ground_truth (world), child
+//                       base_link_truth, and the same as tf (a separate tree)
+//   ground_truth/path   nav_msgs/Path in the SLAM map frame
+//   ground_truth/world  nav_msgs/OccupancyGrid in the SLAM map frame, latched
+// The SLAM map frame is the start pose: pose_in_map = start⁻¹ ∘ pose_in_world.
+#include <ros/ros.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include "ekf_slam_core/sim/grid_world.h"
+#include "ekf_slam_ros/calibration/laser_mount.h"
+#include "ekf_slam_ros/simulator/footprint.h"
+#include "ekf_slam_ros/simulator/ground_truth.h"
+#include "ekf_slam_ros/simulator/pose_history.h"
+#include "ekf_slam_ros/simulator/simulator_params.h"
+#include "p3dx_driver/emulator/p3dx_emulator.h"
+#include "serial_io/pseudo_terminal.h"
+#include "sick_lms200_driver/emulator/lms200_emulator.h"
+
+namespace {
+
+using ekf_slam::Pose2;
+
+// A pseudo-terminal whose symlink's folder exists (created when missing).
+bool openPty(serial_io::PseudoTerminal* pty, const std::string& link, std::string* error) {
+  std::error_code ignored;
+  const std::filesystem::path folder = std::filesystem::path(link).parent_path();
+  if (!folder.empty()) std::filesystem::create_directories(folder, ignored);
+  if (pty->open(link)) return true;
+  *error = "cannot create the pseudo-terminal " + link + ": " + pty->error();
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "simulator");
+  ros::NodeHandle node, private_node("~");
+
+  ekf_slam::sim::SimulatorParams params;
+  std::string error;
+  if (!ekf_slam::sim::loadSimulatorParams(private_node, &params, &error)) {
+    ROS_FATAL("simulator: bad parameters:\n%s", error.c_str());
+    return 1;
+  }
+  ekf_slam::sim::GridWorld world;
+  error = ekf_slam::sim::GridWorld::load(params.world_file, &world);
+  if (!error.empty()) {
+    ROS_FATAL("simulator: cannot load the world (parameter ~world_file): %s", error.c_str());
+    return 1;
+  }
+  if (!world.hasStartPose()) {
+    ROS_FATAL("simulator: %s has no start_pose: [x, y, yaw] (where the robot is put)",
+              params.world_file.c_str());
+    return 1;
+  }
+  const Pose2 start = world.startPose();
+  if (!ekf_slam::sim::footprintFree(world, start.translation(), params.robot_radius)) {
+    ROS_FATAL("simulator: start_pose (%.2f, %.2f) of %s is within robot_radius %.2f m of a wall",
+              start.x, start.y, params.world_file.c_str(), params.robot_radius);
+    return 1;
+  }
+  ekf_slam::calibration::LaserMount mount;
+  error = ekf_slam::calibration::loadLaserMount(params.calibration_file, &mount);
+  if (!error.empty()) {
+    ROS_FATAL("simulator: parameter ~calibration_file: %s", error.c_str());
+    return 1;
+  }
+
+  serial_io::PseudoTerminal p3dx_pty, lms200_pty;
+  if (!openPty(&p3dx_pty, params.p3dx_link, &error) ||
+      !openPty(&lms200_pty, params.lms200_link, &error)) {
+    ROS_FATAL("simulator: %s", error.c_str());
+    return 1;
+  }
+
+  // The robot. Its odometry starts at zero at the driver's OPEN, as on the
+  // real controller; its true pose starts at the world's start pose.
+  p3dx::EmulatorOptions robot_options;
+  robot_options.name = "simulated";
+  robot_options.wheel_noise = params.wheel_noise;
+  robot_options.seed = static_cast<uint32_t>(params.seed);
+  p3dx::P3dxEmulator robot(&p3dx_pty, robot_options);
+  robot.setTruePose(start);
+  uint64_t blocked_steps = 0;
+  robot.setMotionHook([&](const Pose2& current, const Pose2& proposed) {
+    if (ekf_slam::sim::footprintFree(world, proposed.translation(), params.robot_radius)) {
+      return true;
+    }
+    ++blocked_steps;
+    ROS_WARN_THROTTLE(2.0, "simulator: the robot touches a wall at (%.2f, %.2f); it stalls",
+                      current.x, current.y);
+    return false;
+  });
+
+  // The scanner, looking from the true pose at each mirror turn's start.
+  ekf_slam::sim::PoseHistory history(1.0);
+  sick_lms200::EmulatorOptions laser_options;
+  laser_options.range_noise_sigma = params.range_noise;
+  laser_options.seed = static_cast<uint32_t>(params.seed) + 1;
+  const Pose2 laser_in_base = mount.pose();
+  sick_lms200::Lms200Emulator laser(
+      lms200_pty, world, [&](double t) { return ekf_slam::compose(history.at(t), laser_in_base); },
+      laser_options);
+  laser.setPeerBaudSource([&lms200_pty] { return lms200_pty.peerBaud(); });
+  uint64_t scans = 0;
+  laser.setScanObserver([&](const sick_lms200::TrueScan&) { ++scans; });
+
+  ekf_slam::sim::GroundTruthPublisher::Frames frames;
+  frames.truth = params.truth_frame;
+  frames.truth_child = params.truth_child_frame;
+  frames.map = params.map_frame;
+  ekf_slam::sim::GroundTruthPublisher truth_publisher(node, world, start, frames,
+                                                      params.path_spacing);
+
+  ROS_INFO(
+      "simulator: world %s (%d x %d cells), start (%.2f, %.2f, %.3f); P3-DX on %s, "
+      "LMS200 on %s; laser mount (%.3f, %.3f, %.3f) from %s",
+      params.world_file.c_str(), world.width(), world.height(), start.x, start.y, start.theta,
+      params.p3dx_link.c_str(), params.lms200_link.c_str(), mount.x, mount.y, mount.yaw,
+      params.calibration_file.c_str());
+
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point epoch = Clock::now();
+  auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - epoch).count(); };
+  const double truth_period = 1.0 / params.ground_truth_rate;
+  double next_robot_step = 0.0, next_truth = 0.0;
+  history.add(0.0, start);
+  while (ros::ok()) {
+    const double now = seconds();
+    if (now >= next_robot_step) {
+      robot.step(now);
+      history.add(now, robot.truePose());
+      next_robot_step = std::max(next_robot_step + params.robot_step, now);
+    }
+    laser.spinOnce(now);
+    if (now >= next_truth) {
+      next_truth = std::max(next_truth + truth_period, now);
+      truth_publisher.publish(robot.truePose(), robot.velocity(), robot.rotationalVelocity(),
+                              ros::Time::now());
+    }
+    // Sleep to the earliest deadline; at most 5 ms so that commands from
+    // the drivers are answered promptly (a real device answers within ms).
+    const double wake =
+        std::min({next_robot_step, next_truth, laser.nextDeadline(now), seconds() + 0.005});
+    const double sleep = wake - seconds();
+    if (sleep > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(sleep));
+  }
+  // rosconsole is already shut down here (SIGINT): plain stdout.
+  std::printf("simulator: stopping after %lu scans, %lu P3-DX SIPs, %lu blocked motion steps\n",
+              static_cast<unsigned long>(scans),
+              static_cast<unsigned long>(robot.stats().sips_sent),
+              static_cast<unsigned long>(blocked_steps));
+  std::fflush(stdout);
+  return 0;
+}

@@ -1,0 +1,36 @@
+// ekf_slam_node: live EKF-SLAM (see slam_node.h and docs/live_system.md).
+// Exits with 1 and names the key when a parameter or the configuration file
+// is invalid.
+#include <ros/ros.h>
+
+#include <stdexcept>
+
+#include "ekf_slam_ros/slam_node/slam_node.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "ekf_slam_node");
+  ros::NodeHandle node, private_node("~");
+  ekf_slam::SlamNodeParams params;
+  std::string error;
+  if (!ekf_slam::loadSlamNodeParams(private_node, &params, &error)) {
+    ROS_FATAL("ekf_slam_node: %s", error.c_str());
+    return 1;
+  }
+  ekf_slam::SlamConfig config;
+  if (!params.config_file.empty()) {
+    error = ekf_slam::loadSlamConfigFile(params.config_file, &config);
+    if (!error.empty()) {
+      ROS_FATAL("ekf_slam_node: bad configuration %s:\n%s", params.config_file.c_str(),
+                error.c_str());
+      return 1;
+    }
+  }
+  try {
+    ekf_slam::SlamNode slam(node, private_node, params, config);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("ekf_slam_node: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

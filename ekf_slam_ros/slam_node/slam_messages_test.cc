@@ -1,0 +1,211 @@
+// The pure helpers of the live nodes: covariance ellipse sizes, the rviz
+// markers built from a filter, and the conversions to this package's
+// messages.
+#include "ekf_slam_ros/slam_node/slam_messages.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+
+#include "ekf_slam_core/sim/polygon_world.h"
+
+namespace ekf_slam {
+namespace {
+
+Matrix2 rotated(double sigma_major, double sigma_minor, double angle) {
+  const Matrix2 r = Eigen::Rotation2Dd(angle).toRotationMatrix();
+  return r * Vector2(sigma_major * sigma_major, sigma_minor * sigma_minor).asDiagonal() *
+         r.transpose();
+}
+
+TEST(CovarianceEllipse, SemiAxesAreSqrtOfChiSquareTimesEigenvalues) {
+  // 2-dof chi-square 95 % quantile: −2 ln(0.05) = 5.9915.
+  const double k = -2.0 * std::log(0.05);
+  const CovarianceEllipse e = covarianceEllipse(rotated(2.0, 0.5, 0.0), 0.95);
+  EXPECT_NEAR(e.semi_major, std::sqrt(k) * 2.0, 1e-9);
+  EXPECT_NEAR(e.semi_minor, std::sqrt(k) * 0.5, 1e-9);
+  EXPECT_NEAR(std::abs(std::sin(e.angle)), 0.0, 1e-12);  // major axis along x
+
+  const CovarianceEllipse tilted = covarianceEllipse(rotated(0.3, 0.1, 0.7), 0.95);
+  EXPECT_NEAR(tilted.semi_major, std::sqrt(k) * 0.3, 1e-9);
+  EXPECT_NEAR(tilted.semi_minor, std::sqrt(k) * 0.1, 1e-9);
+  EXPECT_NEAR(std::sin(2.0 * (tilted.angle - 0.7)), 0.0, 1e-9);  // direction modulo π
+
+  // 39.35 % (1-sigma in 2D): k = 1.
+  EXPECT_NEAR(covarianceEllipse(rotated(2.0, 0.5, 0.0), 1.0 - std::exp(-0.5)).semi_major, 2.0,
+              1e-6);
+}
+
+TEST(CovarianceEllipse, HoldsItsProbabilityOfSamples) {
+  const Matrix2 c = rotated(0.8, 0.2, -1.1);
+  const CovarianceEllipse e = covarianceEllipse(c, 0.95);
+  const Eigen::LLT<Matrix2> llt(c);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  int inside = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    const Vector2 p = llt.matrixL() * Vector2(normal(rng), normal(rng));
+    // Into the ellipse's axes.
+    const double u = std::cos(e.angle) * p.x() + std::sin(e.angle) * p.y();
+    const double v = -std::sin(e.angle) * p.x() + std::cos(e.angle) * p.y();
+    if (u * u / (e.semi_major * e.semi_major) + v * v / (e.semi_minor * e.semi_minor) <= 1.0) {
+      ++inside;
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(inside) / n, 0.95, 0.005);
+}
+
+TEST(CovarianceEllipse, DegenerateCovarianceGivesZeroAxisNotNaN) {
+  Matrix2 c;
+  c << 1.0, 1.0, 1.0, 1.0;  // rank 1
+  const CovarianceEllipse e = covarianceEllipse(c, 0.95);
+  EXPECT_NEAR(e.semi_minor, 0.0, 1e-6);
+  EXPECT_TRUE(std::isfinite(e.semi_major));
+}
+
+EkfSlam filterWithLandmarks() {
+  EkfSlam filter(FilterOptions{}, Pose2(0.5, -0.2, 0.1), Matrix3::Identity() * 1e-3);
+  EXPECT_EQ(filter.addLandmark(4, Vector2(3.0, 1.0), rotated(0.2, 0.05, 0.3), 5),
+            FilterStatus::kOk);
+  EXPECT_EQ(filter.addLandmark(9, Vector2(-2.0, 4.0), rotated(0.1, 0.1, 0.0), 1),
+            FilterStatus::kOk);
+  return filter;
+}
+
+TEST(LandmarkMarkers, EllipsesAtTheMeansWithFullAxesLabelsAndTheRobot) {
+  const EkfSlam filter = filterWithLandmarks();
+  std_msgs::Header header;
+  header.frame_id = "map";
+  header.stamp = ros::Time(12.5);
+  const visualization_msgs::MarkerArray markers = landmarkMarkers(filter, nullptr, header, 0.95);
+  ASSERT_FALSE(markers.markers.empty());
+  EXPECT_EQ(markers.markers[0].action, visualization_msgs::Marker::DELETEALL);
+  const double k = -2.0 * std::log(0.05);
+  int ellipses = 0, labels = 0, robot = 0;
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    if (m.action == visualization_msgs::Marker::DELETEALL) continue;
+    EXPECT_EQ(m.header.stamp, header.stamp);
+    EXPECT_EQ(m.header.frame_id, "map");
+    if (m.ns == "landmark_ellipses") {
+      ++ellipses;
+      const int slot = filter.slotOf(m.id);
+      ASSERT_GE(slot, 0);
+      EXPECT_DOUBLE_EQ(m.pose.position.x, filter.landmarkPosition(slot).x());
+      EXPECT_DOUBLE_EQ(m.pose.position.y, filter.landmarkPosition(slot).y());
+      const double major = m.id == 4 ? 0.2 : 0.1, minor = m.id == 4 ? 0.05 : 0.1;
+      EXPECT_NEAR(m.scale.x, 2.0 * std::sqrt(k) * major, 1e-9);  // full axis = 2 × semi-axis
+      EXPECT_NEAR(m.scale.y, 2.0 * std::sqrt(k) * minor, 1e-9);
+      if (m.id == 4)
+        EXPECT_NEAR(2.0 * std::atan2(m.pose.orientation.z, m.pose.orientation.w), 0.3, 1e-9);
+    } else if (m.ns == "landmark_ids") {
+      ++labels;
+      EXPECT_EQ(m.text, std::to_string(m.id));
+    } else if (m.ns == "robot_ellipse") {
+      ++robot;
+      EXPECT_DOUBLE_EQ(m.pose.position.x, 0.5);
+      EXPECT_NEAR(m.scale.x, 2.0 * std::sqrt(k * 1e-3), 1e-9);
+    }
+  }
+  EXPECT_EQ(ellipses, 2);
+  EXPECT_EQ(labels, 2);
+  EXPECT_EQ(robot, 1);
+}
+
+TEST(Messages, LandmarkMapCarriesIdsMeansFullCovariancesAndTentativeFlag) {
+  const EkfSlam filter = filterWithLandmarks();
+  std_msgs::Header header;
+  header.frame_id = "map";
+  const LandmarkMap map = toLandmarkMapMessage(filter, header);
+  ASSERT_EQ(map.landmarks.size(), 2u);
+  EXPECT_EQ(map.landmarks[0].id, 4);
+  EXPECT_FALSE(map.landmarks[0].tentative);
+  EXPECT_TRUE(map.landmarks[1].tentative);  // seen once
+  const Matrix2 c = rotated(0.2, 0.05, 0.3);
+  EXPECT_NEAR(map.landmarks[0].covariance[1], c(0, 1), 1e-15);
+  EXPECT_NEAR(map.landmarks[0].covariance[2], c(1, 0), 1e-15);
+  EXPECT_NEAR(map.landmarks[0].covariance[3], c(1, 1), 1e-15);
+  const LandmarkMapFile file = toLandmarkMapFile(filter, "map");
+  ASSERT_EQ(file.landmarks.size(), 2u);
+  EXPECT_EQ(file.landmarks[1].id, 9);
+  EXPECT_EQ(file.landmarks[1].position, Vector2(-2.0, 4.0));
+}
+
+TEST(Messages, AssociationReportNamesDecisionsCandidatesAndIds) {
+  FilterOptions options;
+  EkfSlam filter(options, Pose2(), Matrix3::Identity() * 1e-4);
+  ASSERT_EQ(filter.addLandmark(7, Vector2(2.0, 0.0), Matrix2::Identity() * 1e-3),
+            FilterStatus::kOk);
+  auto observation = [](double x, double y) {
+    PointObservation z;
+    z.z = {std::hypot(x, y), std::atan2(y, x)};
+    z.covariance = Vector2(1e-4, 1e-5).asDiagonal();
+    return z;
+  };
+  const std::vector<PointObservation> observations = {observation(2.01, 0.0),
+                                                      observation(0.0, 5.0)};
+  IterationReport iteration;
+  observe(filter, AssociationOptions{}, observations, &iteration);
+  std_msgs::Header header;
+  header.frame_id = "laser";
+  const AssociationReport report = toAssociationReport(observations, iteration, header);
+  ASSERT_EQ(report.observations.size(), 2u);
+  EXPECT_EQ(report.header.frame_id, "laser");
+  EXPECT_EQ(report.observations[0].decision, "matched");
+  EXPECT_EQ(report.observations[0].landmark_id, 7);
+  ASSERT_FALSE(report.observations[0].candidates.empty());
+  EXPECT_EQ(report.observations[0].candidates[0].landmark_id, 7);
+  EXPECT_LT(report.observations[0].candidates[0].mahalanobis_sq, report.observations[0].gate);
+  EXPECT_NEAR(report.observations[0].gate, -2.0 * std::log(0.01), 1e-6);  // χ²₂(0.99)
+  EXPECT_EQ(report.observations[1].decision, "new");
+  EXPECT_EQ(report.observations[1].landmark_id, 8);  // the next id after 7
+  EXPECT_NEAR(report.observations[1].range, 5.0, 1e-12);
+}
+
+TEST(Messages, FeaturesOfASimulatedRoomKeepEveryPointAndLine) {
+  sim::PolygonWorld room;
+  room.addPolygon({Vector2(-2, -2), Vector2(4, -2), Vector2(4, 3), Vector2(-2, 3)});
+  room.addBox(Vector2(2.0, 1.0), 0.6, 0.4);
+  sim::SweepGeometry sweep;
+  Scan scan;
+  scan.ranges = sim::simulateRanges(room, Pose2(0, 0, 0.2), sweep);
+  scan.angle_min = sweep.angle_min;
+  scan.angle_increment = sweep.angle_increment;
+  scan.range_max = sweep.max_range;
+  const FeatureSet features = extractFeatures(scan, FeatureOptions{});
+  ASSERT_TRUE(features.error.empty()) << features.error;
+  ASSERT_GE(features.lines.size(), 3u);
+  std_msgs::Header header;
+  header.frame_id = "laser";
+  header.stamp = ros::Time(3.25);
+  const Features message = toFeaturesMessage(features, header);
+  EXPECT_EQ(message.header.stamp, header.stamp);
+  ASSERT_EQ(message.lines.size(), features.lines.size());
+  ASSERT_EQ(message.points.size(), features.points_of_interest.size());
+  for (size_t i = 0; i < message.lines.size(); ++i) {
+    EXPECT_DOUBLE_EQ(message.lines[i].p, features.lines[i].p);
+    EXPECT_DOUBLE_EQ(message.lines[i].covariance[1], features.lines[i].covariance(0, 1));
+    EXPECT_DOUBLE_EQ(message.lines[i].end.y, features.lines[i].end.y());
+  }
+  int candidates = 0;
+  for (size_t i = 0; i < message.points.size(); ++i) {
+    EXPECT_EQ(message.points[i].landmark_candidate,
+              features.points_of_interest[i].landmark_candidate);
+    EXPECT_DOUBLE_EQ(message.points[i].range_bearing_covariance[3],
+                     features.points_of_interest[i].range_bearing_covariance(1, 1));
+    candidates += message.points[i].landmark_candidate;
+  }
+  EXPECT_GT(candidates, 0);
+
+  const visualization_msgs::MarkerArray markers = featureMarkers(features, header);
+  ASSERT_EQ(markers.markers.size(), 3u);
+  EXPECT_EQ(markers.markers[0].points.size(), 2 * features.lines.size());
+  EXPECT_EQ(static_cast<int>(markers.markers[1].points.size()), candidates);
+}
+
+}  // namespace
+}  // namespace ekf_slam

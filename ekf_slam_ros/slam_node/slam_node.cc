@@ -1,0 +1,633 @@
+#include "ekf_slam_ros/slam_node/slam_node.h"
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <tf2/exceptions.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "ekf_slam_core/filter/chi_square.h"
+#include "ekf_slam_core/mapping/occupancy_grid.h"
+#include "ekf_slam_ros/conversions/scan_conversion.h"
+#include "ekf_slam_ros/slam_node/slam_messages.h"
+
+namespace ekf_slam {
+namespace {
+
+constexpr DropReason kAllReasons[] = {
+    DropReason::kStampNotIncreasing,
+    DropReason::kTooFewValidReadings,
+    DropReason::kBadScanGeometry,
+    DropReason::kOdomTransformMissing,
+    DropReason::kLaserTransformMissing,
+    DropReason::kQueueOverflow,
+    DropReason::kPaused,
+};
+
+double yawOf(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
+  geometry_msgs::Pose p;
+  p.position.x = pose.x;
+  p.position.y = pose.y;
+  p.orientation.z = std::sin(0.5 * pose.theta);
+  p.orientation.w = std::cos(0.5 * pose.theta);
+  return p;
+}
+
+}  // namespace
+
+const char* toString(DropReason reason) {
+  switch (reason) {
+    case DropReason::kStampNotIncreasing:
+      return "stamp not increasing";
+    case DropReason::kTooFewValidReadings:
+      return "too few valid readings";
+    case DropReason::kBadScanGeometry:
+      return "bad scan geometry";
+    case DropReason::kOdomTransformMissing:
+      return "odom transform missing";
+    case DropReason::kLaserTransformMissing:
+      return "laser transform missing";
+    case DropReason::kQueueOverflow:
+      return "queue overflow";
+    case DropReason::kPaused:
+      return "paused";
+  }
+  return "unknown";
+}
+
+SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,
+                   const SlamConfig& config)
+    : params_(params),
+      config_(config),
+      node_(node),
+      private_node_(private_node),
+      tf_listener_(tf_buffer_),
+      diagnostics_(node, private_node) {
+  for (DropReason reason : kAllReasons) drops_[reason] = 0;
+  localize_only_ = params_.localize_only;
+  path_.header.frame_id = params_.map_frame;
+
+  pose_publisher_ = node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
+  path_publisher_ = node_.advertise<nav_msgs::Path>("path", 1, /*latch=*/true);
+  landmarks_publisher_ = node_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);
+  landmark_map_publisher_ = node_.advertise<LandmarkMap>("landmark_map", 1, /*latch=*/true);
+  association_publisher_ = node_.advertise<AssociationReport>("association", 10);
+  smoothed_path_publisher_ = node_.advertise<nav_msgs::Path>("smoothed_path", 1, true);
+  map_publisher_ = node_.advertise<nav_msgs::OccupancyGrid>("map", 1, /*latch=*/true);
+
+  services_.push_back(private_node_.advertiseService("pause", &SlamNode::onPause, this));
+  services_.push_back(private_node_.advertiseService("resume", &SlamNode::onResume, this));
+  services_.push_back(private_node_.advertiseService("reset", &SlamNode::onReset, this));
+  services_.push_back(private_node_.advertiseService("smooth", &SlamNode::onSmooth, this));
+  services_.push_back(private_node_.advertiseService("save_map", &SlamNode::onSaveMap, this));
+  services_.push_back(private_node_.advertiseService("load_map", &SlamNode::onLoadMap, this));
+
+  if (config_.laser_pose_given) laser_pose_ = config_.pipeline.filter.laser_pose;
+  if (!params_.initial_map.empty()) {
+    LandmarkMapFile map;
+    const std::string error = readLandmarkMap(params_.initial_map, &map);
+    if (!error.empty()) throw std::runtime_error("initial_map: " + error);
+    seed_map_ = map;
+    ROS_INFO("ekf_slam_node: %zu landmarks from %s%s", map.landmarks.size(),
+             params_.initial_map.c_str(), localize_only_ ? " (localisation only)" : "");
+  }
+
+  diagnostics_.setHardwareID("ekf_slam");
+  diagnostics_.add("EKF-SLAM", this, &SlamNode::diagnose);
+  last_diagnostic_time_ = ros::WallTime::now();
+
+  scan_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
+  tf_timer_ =
+      node_.createTimer(ros::Duration(1.0 / params_.tf_publish_rate), &SlamNode::onTfTimer, this);
+  // Scans waiting for a late transform are re-tried even when no new scan
+  // arrives (e.g. the laser stops).
+  drain_timer_ = node_.createTimer(ros::Duration(std::max(0.01, params_.tf_timeout / 4.0)),
+                                   [this](const ros::TimerEvent&) { drainQueue(); });
+  diagnostic_timer_ = node_.createTimer(ros::Duration(0.1),
+                                        [this](const ros::TimerEvent&) { diagnostics_.update(); });
+}
+
+void SlamNode::drop(DropReason reason, const std::string& detail) {
+  ++drops_[reason];
+  // Throttled per reason, so one flood does not hide another kind of fault.
+  switch (reason) {
+    case DropReason::kPaused:
+      ROS_DEBUG_THROTTLE(5.0, "ekf_slam_node: paused, scan dropped");
+      break;
+    case DropReason::kStampNotIncreasing:
+      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s", toString(reason),
+                        detail.c_str());
+      break;
+    case DropReason::kTooFewValidReadings:
+    case DropReason::kBadScanGeometry:
+      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s", toString(reason),
+                        detail.c_str());
+      break;
+    default:
+      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s (%ld dropped so far)",
+                        toString(reason), detail.c_str(), drops_[reason]);
+  }
+}
+
+void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
+  ++scans_received_;
+  // A bag restarted (or looped) under use_sim_time: the clock runs backwards.
+  // The tf buffer would refuse the old-new data; the map is kept (its stamps
+  // now lie in the future), so scans are dropped as not increasing until
+  // ~reset, which the log says.
+  const ros::Time now = ros::Time::now();
+  if (now + ros::Duration(1.0) < last_clock_) {
+    ROS_WARN(
+        "ekf_slam_node: the clock jumped back by %.3f s (bag restarted?): tf buffer "
+        "cleared; call ~reset to start a new map from the new data",
+        (last_clock_ - now).toSec());
+    tf_buffer_.clear();
+    queue_.clear();
+  }
+  last_clock_ = now;
+  if (paused_) {
+    drop(DropReason::kPaused, "");
+    return;
+  }
+  PendingScan pending;
+  pending.message = message;
+  pending.scan = ros_conversions::fromLaserScan(*message);
+  pending.received = ros::Time::now();
+  std::ostringstream detail;
+  detail.setf(std::ios::fixed);
+  detail.precision(3);
+  const std::string geometry = validateScan(pending.scan);
+  if (!geometry.empty()) {
+    detail << "scan at " << message->header.stamp.toSec() << ": " << geometry;
+    drop(DropReason::kBadScanGeometry, detail.str());
+    return;
+  }
+  const int valid = countValidReadings(pending.scan);
+  if (valid < params_.min_valid_readings) {
+    detail << "scan at " << message->header.stamp.toSec() << " has " << valid << " of "
+           << pending.scan.size() << " readings usable (min_valid_readings "
+           << params_.min_valid_readings << "); the map is not touched";
+    drop(DropReason::kTooFewValidReadings, detail.str());
+    return;
+  }
+  if (last_accepted_stamp_ && !(message->header.stamp > *last_accepted_stamp_)) {
+    detail << "scan stamp " << message->header.stamp.toSec() << " is "
+           << (*last_accepted_stamp_ - message->header.stamp).toSec()
+           << " s before or equal to the last accepted scan's " << last_accepted_stamp_->toSec()
+           << "; the map is not touched";
+    drop(DropReason::kStampNotIncreasing, detail.str());
+    return;
+  }
+  last_accepted_stamp_ = message->header.stamp;
+  queue_.push_back(pending);
+  while (static_cast<int>(queue_.size()) > params_.scan_queue_size) {
+    std::ostringstream overflow;
+    overflow << "scan at " << queue_.front().message->header.stamp.toSec() << " still waiting for "
+             << "tf when " << params_.scan_queue_size << " newer scans arrived (scan_queue_size)";
+    queue_.pop_front();
+    drop(DropReason::kQueueOverflow, overflow.str());
+  }
+  drainQueue();
+}
+
+bool SlamNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+                      Pose2* pose, std::string* why) const {
+  try {
+    const geometry_msgs::TransformStamped t = tf_buffer_.lookupTransform(target, source, stamp);
+    *pose =
+        Pose2(t.transform.translation.x, t.transform.translation.y, yawOf(t.transform.rotation));
+    return true;
+  } catch (const tf2::TransformException& e) {
+    std::ostringstream text;
+    text.setf(std::ios::fixed);
+    text.precision(3);
+    text << target << " -> " << source << " at " << stamp.toSec();
+    // How late: the newest transform there is, if any.
+    try {
+      const ros::Time latest =
+          tf_buffer_.lookupTransform(target, source, ros::Time(0)).header.stamp;
+      if (latest.isZero()) {
+        text << " (only a static transform? " << e.what() << ")";
+      } else if (latest < stamp) {
+        text << ": the newest is " << (stamp - latest).toSec() << " s older than the scan";
+      } else {
+        text << ": the scan is older than the transforms still buffered (" << e.what() << ")";
+      }
+    } catch (const tf2::TransformException&) {
+      text << ": never received (" << e.what() << ")";
+    }
+    *why = text.str();
+    return false;
+  }
+}
+
+void SlamNode::drainQueue() {
+  while (!queue_.empty()) {
+    const PendingScan& pending = queue_.front();
+    const ros::Time stamp = pending.message->header.stamp;
+    const std::string& laser_frame = pending.message->header.frame_id;
+    Pose2 odometry, laser;
+    std::string odom_why, laser_why;
+    const bool have_odometry =
+        lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &odom_why);
+    const bool have_laser = lookup(params_.base_frame, laser_frame, stamp, &laser, &laser_why);
+    if (have_odometry && have_laser) {
+      const PendingScan scan = pending;
+      queue_.pop_front();
+      process(scan, odometry, laser);
+      continue;
+    }
+    const double waited = (ros::Time::now() - pending.received).toSec();
+    if (waited < params_.tf_timeout && waited >= 0.0) return;  // wait for tf; order is kept
+    std::ostringstream detail;
+    detail.setf(std::ios::fixed);
+    detail.precision(3);
+    detail << "scan at " << stamp.toSec() << " dropped after waiting " << waited
+           << " s (tf_timeout " << params_.tf_timeout << " s) for ";
+    const DropReason reason =
+        have_odometry ? DropReason::kLaserTransformMissing : DropReason::kOdomTransformMissing;
+    detail << (have_odometry ? laser_why : odom_why);
+    if (!have_odometry && !have_laser) detail << "; also " << laser_why;
+    detail << "; the map is not touched";
+    queue_.pop_front();
+    drop(reason, detail.str());
+  }
+}
+
+void SlamNode::createPipeline(const Pose2& laser_pose) {
+  config_.pipeline.filter.laser_pose = laser_pose;
+  laser_pose_ = laser_pose;
+  pipeline_ = std::make_unique<SlamPipeline>(config_.pipeline);
+  if (seed_map_) {
+    int refused = 0;
+    for (const LandmarkRecord& r : seed_map_->landmarks) {
+      const FilterStatus status =
+          pipeline_->mutableFilter().addLandmark(r.id, r.position, r.covariance, r.observations);
+      if (status != FilterStatus::kOk) ++refused;
+    }
+    if (refused > 0) ROS_WARN("ekf_slam_node: %d landmarks of the loaded map refused", refused);
+    seed_map_.reset();
+  }
+  pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
+}
+
+void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const Pose2& laser) {
+  if (!pipeline_) {
+    createPipeline(laser_pose_ ? *laser_pose_ : laser);
+    laser_frame_ = pending.message->header.frame_id;
+    ROS_INFO("ekf_slam_node: started; laser pose %s -> %s: %.3f m, %.3f m, %.2f deg%s",
+             params_.base_frame.c_str(), laser_frame_.c_str(), laser_pose_->x, laser_pose_->y,
+             radToDeg(laser_pose_->theta), config_.laser_pose_given ? " (configuration)" : " (tf)");
+  } else if (!config_.laser_pose_given) {
+    const Pose2 d = between(*laser_pose_, laser);
+    if (std::hypot(d.x, d.y) > params_.laser_pose_tolerance ||
+        std::abs(d.theta) > params_.laser_pose_tolerance) {
+      ++laser_pose_changes_;
+      ROS_WARN_THROTTLE(10.0,
+                        "ekf_slam_node: %s -> %s changed by (%.3f m, %.3f m, %.2f deg) since "
+                        "start; the filter keeps the pose it started with (reset to adopt it)",
+                        params_.base_frame.c_str(), pending.message->header.frame_id.c_str(), d.x,
+                        d.y, radToDeg(d.theta));
+    }
+  }
+
+  const size_t records_before = pipeline_->scans().size();
+  const ScanResult result = pipeline_->processScan(pending.scan, odometry);
+  if (pipeline_->scans().size() > records_before) stored_scans_.push_back(pending.scan);
+  if (!result.message.empty()) {
+    ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f %s: %s",
+                      pending.message->header.stamp.toSec(), toString(result.outcome),
+                      result.message.c_str());
+  }
+  if (!odometry.allFinite()) return;
+
+  const ros::Time stamp = pending.message->header.stamp;
+  last_scan_stamp_ = stamp;
+  map_to_odom_ = pipeline_->mapToOdom();
+  have_map_to_odom_ = true;
+  publishMapToOdom(stamp);
+
+  std_msgs::Header map_header;
+  map_header.stamp = stamp;
+  map_header.frame_id = params_.map_frame;
+
+  geometry_msgs::PoseWithCovarianceStamped pose;
+  pose.header = map_header;
+  pose.pose.pose = toPoseMessage(result.pose);
+  // (x, y, yaw) of the filter into the 6×6 (x, y, z, roll, pitch, yaw) layout.
+  const Matrix3 c = pipeline_->filter().poseCovariance();
+  const int index[3] = {0, 1, 5};
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) pose.pose.covariance[index[r] * 6 + index[k]] = c(r, k);
+  }
+  pose_publisher_.publish(pose);
+
+  geometry_msgs::PoseStamped path_pose;
+  path_pose.header = map_header;
+  path_pose.pose = pose.pose.pose;
+  path_.header.stamp = stamp;
+  path_.poses.push_back(path_pose);
+  // A long run's whole path re-sent every scan would cost megabytes per
+  // message; the published path keeps the newest poses.
+  if (params_.path_max_poses > 0 && static_cast<int>(path_.poses.size()) > params_.path_max_poses) {
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - params_.path_max_poses);
+  }
+  path_publisher_.publish(path_);
+
+  if (result.outcome != ScanOutcome::kIterated) return;
+  for (double nis : result.iteration.nis) {
+    nis_window_.push_back(nis);
+    if (static_cast<int>(nis_window_.size()) > params_.nis_window) nis_window_.pop_front();
+  }
+  if (landmarks_publisher_.getNumSubscribers() > 0) {
+    landmarks_publisher_.publish(landmarkMarkers(pipeline_->filter(), &result.iteration, map_header,
+                                                 params_.ellipse_probability));
+  }
+  publishLandmarkMap(map_header);
+  std_msgs::Header laser_header = pending.message->header;
+  association_publisher_.publish(
+      toAssociationReport(result.observations, result.iteration, laser_header));
+}
+
+void SlamNode::publishLandmarkMap(const std_msgs::Header& header) {
+  if (pipeline_) {
+    landmark_map_publisher_.publish(toLandmarkMapMessage(pipeline_->filter(), header));
+    return;
+  }
+  // No filter yet (before the first scan): the map waiting to seed it, or none.
+  LandmarkMap message;
+  message.header = header;
+  if (seed_map_) {
+    for (const LandmarkRecord& r : seed_map_->landmarks) {
+      Landmark m;
+      m.id = r.id;
+      m.x = r.position.x();
+      m.y = r.position.y();
+      m.covariance = {r.covariance(0, 0), r.covariance(0, 1), r.covariance(1, 0),
+                      r.covariance(1, 1)};
+      m.observations = r.observations;
+      m.tentative = r.observations <= 1;
+      message.landmarks.push_back(m);
+    }
+  }
+  landmark_map_publisher_.publish(message);
+}
+
+void SlamNode::publishMapToOdom(const ros::Time& data_stamp) {
+  // Each stamp once (tf2 listeners warn about repeated data); stamped with
+  // data time, future-dated by transform_tolerance so that consumers can
+  // look up map → base_link until the next update (as amcl and gmapping do).
+  if (!have_map_to_odom_ || data_stamp <= last_tf_stamp_) return;
+  last_tf_stamp_ = data_stamp;
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = data_stamp + ros::Duration(params_.transform_tolerance);
+  t.header.frame_id = params_.map_frame;
+  t.child_frame_id = params_.odom_frame;
+  t.transform.translation.x = map_to_odom_.x;
+  t.transform.translation.y = map_to_odom_.y;
+  t.transform.rotation.z = std::sin(0.5 * map_to_odom_.theta);
+  t.transform.rotation.w = std::cos(0.5 * map_to_odom_.theta);
+  tf_broadcaster_.sendTransform(t);
+}
+
+void SlamNode::onTfTimer(const ros::TimerEvent&) {
+  // Between scans map → odom is constant; re-sent with the stamp of the
+  // newest odom → base_link (data time), so map → base_link stays
+  // available at the odometry's rate.
+  if (!have_map_to_odom_) return;
+  try {
+    const ros::Time latest =
+        tf_buffer_.lookupTransform(params_.odom_frame, params_.base_frame, ros::Time(0))
+            .header.stamp;
+    publishMapToOdom(latest);
+  } catch (const tf2::TransformException&) {
+    // No odometry at all right now: nothing newer to stamp with.
+  }
+}
+
+void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const ros::WallTime now = ros::WallTime::now();
+  const double period = (now - last_diagnostic_time_).toSec();
+  const long iterations = pipeline_ ? pipeline_->counters().iterations : 0;
+  const double rate =
+      period > 0.0 ? std::max(0L, iterations - iterations_at_last_diagnostic_) / period : 0.0;
+  iterations_at_last_diagnostic_ = iterations;
+  last_diagnostic_time_ = now;
+
+  long drops = 0;
+  for (const auto& [reason, count] : drops_) {
+    if (reason != DropReason::kPaused) drops += count;
+  }
+  const PipelineCounters counters = pipeline_ ? pipeline_->counters() : PipelineCounters{};
+  const long pipeline_rejects = counters.time_not_increasing + counters.odometry_jumps +
+                                counters.bad_input + counters.update_failures;
+  drops += pipeline_rejects;
+
+  double nis_average = 0.0;
+  for (double nis : nis_window_) nis_average += nis;
+  const int samples = static_cast<int>(nis_window_.size());
+  if (samples > 0) nis_average /= samples;
+  bool nis_inside = true;
+  if (samples > 0) {
+    const ChiSquareBand band = averageChiSquareBand(2.0, samples, 0.95);
+    nis_inside = nis_average >= band.lower && nis_average <= band.upper;
+    std::ostringstream text;
+    text.precision(3);
+    text << "[" << band.lower << ", " << band.upper << "]";
+    status.add("NIS 95% band", text.str());
+  } else {
+    status.add("NIS 95% band", "no matches yet");
+  }
+
+  if (paused_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused");
+  } else if (drops > drops_at_last_diagnostic_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   std::to_string(drops - drops_at_last_diagnostic_) +
+                       " inputs rejected since the last report (see counters)");
+  } else if (!nis_inside) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "average NIS outside its 95% band (filter inconsistent)");
+  } else if (!pipeline_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first scan");
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
+  }
+  drops_at_last_diagnostic_ = drops;
+
+  status.add("paused", paused_);
+  status.add("localize only", localize_only_);
+  status.add("scans received", scans_received_);
+  status.add("scans processed", pipeline_ ? counters.scans : 0L);
+  status.add("iterations", iterations);
+  status.addf("iteration rate (Hz)", "%.2f", rate);
+  status.add("landmarks", pipeline_ ? pipeline_->filter().landmarkCount() : 0);
+  status.add("state size", pipeline_ ? pipeline_->filter().stateDim() : EkfSlam::kPoseDim);
+  status.addf("NIS average", "%.3f", nis_average);
+  status.add("NIS samples", samples);
+  for (const auto& [reason, count] : drops_) {
+    status.add(std::string("dropped: ") + toString(reason), count);
+  }
+  status.add("rejected by filter: time not increasing", counters.time_not_increasing);
+  status.add("rejected by filter: odometry jump", counters.odometry_jumps);
+  status.add("rejected by filter: bad input", counters.bad_input);
+  status.add("rejected by filter: update refused", counters.update_failures);
+  status.add("laser pose changes", laser_pose_changes_);
+}
+
+bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  paused_ = true;
+  queue_.clear();
+  response.success = true;
+  response.message = "paused: scans are dropped until resume";
+  ROS_INFO("ekf_slam_node: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  paused_ = false;
+  response.success = true;
+  response.message = "resumed";
+  ROS_INFO("ekf_slam_node: resumed");
+  return true;
+}
+
+void SlamNode::resetState() {
+  pipeline_.reset();
+  if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
+  queue_.clear();
+  last_accepted_stamp_.reset();
+  stored_scans_.clear();
+  path_.poses.clear();
+  nis_window_.clear();
+  have_map_to_odom_ = false;
+  iterations_at_last_diagnostic_ = 0;
+  // drops_ stay: they count the node's inputs, not the map's history.
+}
+
+bool SlamNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  resetState();
+  seed_map_.reset();
+  localize_only_ = params_.localize_only;
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  publishLandmarkMap(header);
+  path_.header.stamp = last_scan_stamp_;
+  path_publisher_.publish(path_);
+  response.success = true;
+  response.message = "reset: empty map; the next scan starts a new one";
+  ROS_INFO("ekf_slam_node: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
+  if (request.path.empty()) {
+    response.success = false;
+    response.message = "path is empty";
+    return true;
+  }
+  LandmarkMapFile map;
+  if (pipeline_) {
+    map = toLandmarkMapFile(pipeline_->filter(), params_.map_frame);
+  } else if (seed_map_) {
+    map = *seed_map_;
+  } else {
+    map.frame = params_.map_frame;
+  }
+  const std::string error = writeLandmarkMap(request.path, map);
+  response.success = error.empty();
+  response.message =
+      error.empty() ? std::to_string(map.landmarks.size()) + " landmarks written to " + request.path
+                    : error;
+  ROS_INFO("ekf_slam_node: save_map: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
+  LandmarkMapFile map;
+  const std::string error = readLandmarkMap(request.path, &map);
+  if (!error.empty()) {
+    response.success = false;
+    response.message = error + " (the current map is kept)";
+    response.landmarks = 0;
+    ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
+    return true;
+  }
+  if (map.frame != params_.map_frame) {
+    ROS_WARN("ekf_slam_node: load_map: the file's frame '%s' differs from map_frame '%s'",
+             map.frame.c_str(), params_.map_frame.c_str());
+  }
+  // The filter restarts with the robot at the map origin and the loaded
+  // landmarks as a prior, uncorrelated with the pose.
+  resetState();
+  seed_map_ = map;
+  localize_only_ = request.localize_only;
+  if (laser_pose_) createPipeline(*laser_pose_);
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  publishLandmarkMap(header);
+  response.success = true;
+  response.landmarks = static_cast<int>(map.landmarks.size());
+  response.message = std::to_string(map.landmarks.size()) + " landmarks loaded from " +
+                     request.path +
+                     (localize_only_ ? "; localisation only" : "; mapping continues");
+  ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  if (!pipeline_ || pipeline_->scans().empty()) {
+    response.success = false;
+    response.message = "no scans processed yet";
+    return true;
+  }
+  const std::vector<StampedPose> smoothed = pipeline_->smoothedScanPoses();
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  nav_msgs::Path path;
+  path.header = header;
+  OccupancyGrid grid(config_.map);
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = ros::Time(smoothed[i].stamp);
+    p.header.frame_id = params_.map_frame;
+    p.pose = toPoseMessage(smoothed[i].pose);
+    path.poses.push_back(p);
+    if (i < stored_scans_.size()) {
+      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[i]);
+    }
+  }
+  smoothed_path_publisher_.publish(path);
+
+  nav_msgs::OccupancyGrid map;
+  map.header = header;
+  map.info.map_load_time = header.stamp;
+  map.info.resolution = static_cast<float>(grid.resolution());
+  map.info.width = grid.width();
+  map.info.height = grid.height();
+  map.info.origin.position.x = grid.origin().x();
+  map.info.origin.position.y = grid.origin().y();
+  map.info.origin.orientation.w = 1.0;
+  map.data = grid.occupancyValues();
+  map_publisher_.publish(map);
+
+  std::ostringstream text;
+  text << "smoothed " << smoothed.size() << " scan poses (" << pipeline_->counters().iterations
+       << " iterations); map " << grid.width() << " x " << grid.height() << " cells at "
+       << grid.resolution() << " m";
+  response.success = true;
+  response.message = text.str();
+  ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
+  return true;
+}
+
+}  // namespace ekf_slam

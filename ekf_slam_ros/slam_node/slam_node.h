@@ -1,0 +1,135 @@
+// ekf_slam_node: the live EKF-SLAM node, a thin shell around SlamPipeline
+// (the same object the offline runner uses, so a bag gives the same answer
+// live and offline).
+//
+// Data flow per scan (all callbacks on one thread, ros::spin):
+//   scan → checks (stamp after the last one, enough valid readings, geometry)
+//        → queue until tf odom→base_link and base_link→laser exist at the
+//          scan's stamp (at most tf_timeout, then dropped and logged)
+//        → SlamPipeline::processScan(scan, odometry)
+//        → tf map→odom, pose, path, landmarks, landmark_map, association.
+// Nothing is written back into the robot (thesis §3.4.2): the map frame
+// is a separate estimate published as map → odom (REP-105).
+// Every output is stamped with the scan's stamp (data time), so bag replay
+// with use_sim_time gives the same stamps as the live run.
+// Topics, services and parameters: docs/live_system.md.
+#pragma once
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ekf_slam/LoadMap.h>
+#include <ekf_slam/SaveMap.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/io/landmark_map.h"
+#include "ekf_slam_core/pipeline/slam_pipeline.h"
+#include "ekf_slam_ros/offline/slam_config.h"
+#include "ekf_slam_ros/slam_node/slam_node_params.h"
+
+namespace ekf_slam {
+
+// Why an input was not used; each reason is a counter on /diagnostics.
+enum class DropReason {
+  kStampNotIncreasing,     // stamp not after the last accepted scan's
+  kTooFewValidReadings,    // NaN / no-return scan
+  kBadScanGeometry,        // angle_increment 0, NaN angles, ...
+  kOdomTransformMissing,   // odom → base_link not available at the stamp within tf_timeout
+  kLaserTransformMissing,  // base_link → laser not available at the stamp within tf_timeout
+  kQueueOverflow,          // more scans waiting for tf than scan_queue_size
+  kPaused,                 // the pause service was called
+};
+const char* toString(DropReason reason);
+
+class SlamNode {
+ public:
+  // Parameters and configuration must be valid (loaded by their loaders).
+  SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,
+           const SlamConfig& config);
+
+ private:
+  struct PendingScan {
+    sensor_msgs::LaserScan::ConstPtr message;
+    Scan scan;
+    ros::Time received;  // for the tf wait (clock time: data or sim)
+  };
+
+  void onScan(const sensor_msgs::LaserScan::ConstPtr& message);
+  void drainQueue();
+  // The transform target → source at `stamp`; false with a description of
+  // what is missing (frames, how late) in `why`.
+  bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+              Pose2* pose, std::string* why) const;
+  void process(const PendingScan& pending, const Pose2& odometry, const Pose2& laser);
+  void drop(DropReason reason, const std::string& detail);
+
+  void createPipeline(const Pose2& laser_pose);
+  void publishMapToOdom(const ros::Time& data_stamp);
+  void publishLandmarkMap(const std_msgs::Header& header);
+  void onTfTimer(const ros::TimerEvent&);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
+  bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
+  void resetState();
+
+  SlamNodeParams params_;
+  SlamConfig config_;
+  ros::NodeHandle node_;
+  ros::NodeHandle private_node_;
+
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+
+  ros::Subscriber scan_subscriber_;
+  ros::Publisher pose_publisher_, path_publisher_, landmarks_publisher_, landmark_map_publisher_,
+      association_publisher_, smoothed_path_publisher_, map_publisher_;
+  std::vector<ros::ServiceServer> services_;
+  ros::Timer tf_timer_, drain_timer_, diagnostic_timer_;
+  diagnostic_updater::Updater diagnostics_;
+
+  // SLAM state. The pipeline is created at the first scan, when the laser
+  // pose is known (from the configuration or tf).
+  std::unique_ptr<SlamPipeline> pipeline_;
+  std::optional<Pose2> laser_pose_;          // base_link → laser the pipeline uses
+  std::optional<LandmarkMapFile> seed_map_;  // a loaded map waiting for the pipeline
+  bool localize_only_ = false;
+  bool paused_ = false;
+  std::deque<PendingScan> queue_;
+  std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
+  std::vector<Scan> stored_scans_;                // one per pipeline record, for the map
+  nav_msgs::Path path_;
+  std::string laser_frame_;
+  ros::Time last_scan_stamp_;  // of the last processed scan
+  ros::Time last_clock_;       // ros::Time::now() at the last scan (jump-back detection)
+  ros::Time last_tf_stamp_;    // map→odom stamp last sent (before the tolerance)
+  bool have_map_to_odom_ = false;
+  Pose2 map_to_odom_;
+
+  // Diagnostics.
+  std::map<DropReason, long> drops_;
+  long scans_received_ = 0;
+  long iterations_at_last_diagnostic_ = 0;
+  ros::WallTime last_diagnostic_time_;
+  std::deque<double> nis_window_;  // the last nis_window NIS values
+  long drops_at_last_diagnostic_ = 0;
+  long laser_pose_changes_ = 0;
+};
+
+}  // namespace ekf_slam

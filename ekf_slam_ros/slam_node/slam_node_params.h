@@ -1,0 +1,45 @@
+// Node-level parameters of ekf_slam_node (frames, topics, tf waiting, publish
+// rates): read from the private namespace and validated; an unknown key or a
+// bad value stops the node with the key's name. The filter/feature
+// parameters live in the file named by `config_file` (config/ekf_slam.yaml
+// format) and go through the same loader as ekf_slam_offline.
+// Every key, its unit and default: config/ekf_slam_node.yaml.
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <string>
+
+namespace ekf_slam {
+
+struct SlamNodeParams {
+  std::string config_file;  // config/ekf_slam.yaml format; empty: built-in defaults
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  std::string scan_topic = "scan";
+  double tf_timeout = 0.3;             // s a scan may wait for its transforms
+  int scan_queue_size = 30;            // scans waiting for tf at most (oldest dropped)
+  double transform_tolerance = 0.1;    // s map→odom is future-dated by
+  double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
+  int min_valid_readings = 10;         // fewer usable ranges: the scan is rejected
+  double laser_pose_tolerance = 0.01;  // m / rad: larger base_link→laser change warns
+  int nis_window = 100;                // matches in the NIS average on /diagnostics
+  double ellipse_probability = 0.95;   // of the covariance ellipses drawn
+  bool localize_only = false;          // start without adding landmarks
+  std::string initial_map;             // landmark map file loaded at start ("" none)
+  double diagnostic_period = 1.0;      // s
+  int path_max_poses = 10000;          // newest poses in `path` (0: all); the smoother keeps all
+};
+
+// False with `error` naming the key (resolved name) on a bad or unknown key.
+struct FeatureNodeParams {
+  std::string config_file;  // its `features:` section is used; empty: defaults
+  std::string scan_topic = "scan";
+};
+
+bool loadSlamNodeParams(const ros::NodeHandle& private_node, SlamNodeParams* params,
+                        std::string* error);
+bool loadFeatureNodeParams(const ros::NodeHandle& private_node, FeatureNodeParams* params,
+                           std::string* error);
+}  // namespace ekf_slam

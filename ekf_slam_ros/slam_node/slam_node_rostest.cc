@@ -1,0 +1,534 @@
+// ekf_slam_node on a real roscore (rostest): this test node is the robot. It
+// drives a circle in a synthetic room (ray cast with the core's polygon
+// world), publishing tf odom → base_link, tf base_link → laser and laser
+// scans, then feeds the node bad input and calls its services.
+//   BadInput.*: a scan full of NaN, a scan stamped in the past, scans while
+//     base_link → laser is missing: the node keeps running, /diagnostics
+//     counts each case, the log names the frames, the map is unchanged.
+//   Services.*: pause / resume, save_map / reset / load_map, smooth.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ekf_slam/AssociationReport.h>
+#include <ekf_slam/Features.h>
+#include <ekf_slam/LandmarkMap.h>
+#include <ekf_slam/LoadMap.h>
+#include <ekf_slam/SaveMap.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/LaserScan.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <random>
+#include <set>
+#include <thread>
+
+#include "ekf_slam_core/io/landmark_map.h"
+#include "ekf_slam_core/sim/polygon_world.h"
+
+namespace ekf_slam {
+namespace {
+
+constexpr double kRate = 10.0;  // Hz, scans and tf
+const char* kNode = "/ekf_slam";
+
+// The robot: a circle of radius 1 m in a 8 m × 6 m room with three boxes,
+// odometry = ground truth (the node's behaviour, not accuracy, is tested).
+class Robot {
+ public:
+  Robot() {
+    room_.addPolygon({Vector2(-4, -3), Vector2(4, -3), Vector2(4, 3), Vector2(-4, 3)});
+    room_.addBox(Vector2(2.5, 1.5), 0.6, 0.4, 0.3);
+    room_.addBox(Vector2(-2.5, -1.0), 0.5, 0.5);
+    room_.addBox(Vector2(0.5, -2.2), 0.8, 0.3);
+    scans_ = node_.advertise<sensor_msgs::LaserScan>("scan", 10);
+  }
+  ~Robot() { stop(); }
+
+  void start() {
+    running_ = true;
+    thread_ = std::thread([this] { loop(); });
+  }
+  void stop() {
+    running_ = false;
+    if (thread_.joinable()) thread_.join();
+  }
+
+  std::atomic<bool> publish_scans{true};     // good scans
+  std::atomic<bool> publish_laser_tf{true};  // base_link → laser
+
+  // Publishes one scan now with `stamp` and ranges transformed by `edit`.
+  void publishScan(const ros::Time& stamp, const std::function<void(std::vector<float>*)>& edit) {
+    sensor_msgs::LaserScan scan = makeScan(stamp);
+    edit(&scan.ranges);
+    scans_.publish(scan);
+  }
+  ros::Time lastGoodStamp() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return last_good_stamp_;
+  }
+  bool wasScanStamp(const ros::Time& stamp) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return good_stamps_.count(stamp) > 0;
+  }
+
+ private:
+  Pose2 poseAt(double t) const {
+    const double w = 0.15, radius = 1.0;  // rad/s, m
+    const double heading = w * t;
+    return Pose2(radius * std::sin(heading), -radius * std::cos(heading), heading);
+  }
+
+  sensor_msgs::LaserScan makeScan(const ros::Time& stamp) {
+    sim::SweepGeometry sweep;  // 181 beams over 180°, 8 m
+    const double t = (stamp - start_).toSec();
+    const Pose2 laser = compose(poseAt(t), laser_in_base_);
+    std::vector<double> ranges;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ranges = sim::simulateRanges(room_, laser, sweep, 0.005, &rng_);
+    }
+    sensor_msgs::LaserScan scan;
+    scan.header.stamp = stamp;
+    scan.header.frame_id = "laser";
+    scan.angle_min = sweep.angle_min;
+    scan.angle_increment = sweep.angle_increment;
+    scan.angle_max = sweep.angle_min + (sweep.count - 1) * sweep.angle_increment;
+    scan.range_min = 0.05;
+    scan.range_max = sweep.max_range;
+    for (double r : ranges) scan.ranges.push_back(static_cast<float>(r));
+    return scan;
+  }
+
+  geometry_msgs::TransformStamped transform(const ros::Time& stamp, const std::string& parent,
+                                            const std::string& child, const Pose2& p) {
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = stamp;
+    t.header.frame_id = parent;
+    t.child_frame_id = child;
+    t.transform.translation.x = p.x;
+    t.transform.translation.y = p.y;
+    t.transform.rotation.z = std::sin(0.5 * p.theta);
+    t.transform.rotation.w = std::cos(0.5 * p.theta);
+    return t;
+  }
+
+  void loop() {
+    // One trajectory for the whole process: a later test continues where the
+    // previous one stopped, so the node never sees the odometry jump back.
+    static const ros::Time process_start = ros::Time::now();
+    start_ = process_start;
+    ros::Rate rate(kRate);
+    while (running_ && ros::ok()) {
+      const ros::Time now = ros::Time::now();
+      tf_.sendTransform(transform(now, "odom", "base_link", poseAt((now - start_).toSec())));
+      if (publish_laser_tf) tf_.sendTransform(transform(now, "base_link", "laser", laser_in_base_));
+      if (publish_scans) {
+        scans_.publish(makeScan(now));
+        std::lock_guard<std::mutex> lock(mutex_);
+        last_good_stamp_ = now;
+        good_stamps_.insert(now);
+      }
+      rate.sleep();
+    }
+  }
+
+  ros::NodeHandle node_;
+  ros::Publisher scans_;
+  tf2_ros::TransformBroadcaster tf_;
+  sim::PolygonWorld room_;
+  const Pose2 laser_in_base_{0.16, 0.0, 0.0};  // LMS200 on a P3-DX: 16 cm ahead
+  std::mt19937 rng_{42};
+  std::mutex mutex_;
+  ros::Time start_, last_good_stamp_;
+  std::set<ros::Time> good_stamps_;
+  std::atomic<bool> running_{false};
+  std::thread thread_;
+};
+
+// Everything the node publishes that the tests look at.
+class Observer {
+ public:
+  Observer() {
+    subscribers_.push_back(node_.subscribe("/diagnostics", 50, &Observer::onDiagnostics, this));
+    subscribers_.push_back(node_.subscribe("landmark_map", 10, &Observer::onMap, this));
+    subscribers_.push_back(node_.subscribe("pose", 50, &Observer::onPose, this));
+    // Every node publishes its log on /rosout directly (no rosout aggregator needed).
+    subscribers_.push_back(node_.subscribe("/rosout", 500, &Observer::onLog, this));
+    subscribers_.push_back(node_.subscribe("map", 1, &Observer::onGrid, this));
+    subscribers_.push_back(node_.subscribe("features", 10, &Observer::onFeatures, this));
+    subscribers_.push_back(node_.subscribe("association", 10, &Observer::onAssociation, this));
+    subscribers_.push_back(node_.subscribe("smoothed_path", 1, &Observer::onSmoothedPath, this));
+  }
+
+  // The node's diagnostic value `key` as a number (NaN when not reported yet).
+  double diagnostic(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = diagnostics_.find(key);
+    return it == diagnostics_.end() ? std::nan("") : std::atof(it->second.c_str());
+  }
+  std::string diagnosticText(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = diagnostics_.find(key);
+    return it == diagnostics_.end() ? "" : it->second;
+  }
+  long diagnosticsReceived() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return diagnostics_received_;
+  }
+  ekf_slam::LandmarkMap map() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return map_;
+  }
+  long maps() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return maps_;
+  }
+  long poses() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return poses_;
+  }
+  ros::Time lastPoseStamp() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return last_pose_stamp_;
+  }
+  bool logged(const std::string& a, const std::string& b) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const std::string& line : log_) {
+      if (line.find(a) != std::string::npos && line.find(b) != std::string::npos) return true;
+    }
+    ADD_FAILURE() << "no log line of " << kNode << " with '" << a << "' and '" << b << "' among "
+                  << log_.size() << " lines from it (" << other_lines_ << " from other nodes)";
+    return false;
+  }
+  nav_msgs::OccupancyGrid grid() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return grid_;
+  }
+  ekf_slam::Features features() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return features_;
+  }
+  ekf_slam::AssociationReport association() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return association_;
+  }
+  geometry_msgs::PoseWithCovarianceStamped pose() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pose_;
+  }
+  size_t smoothedPoses() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return smoothed_poses_;
+  }
+
+ private:
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray& array) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const diagnostic_msgs::DiagnosticStatus& status : array.status) {
+      if (status.name.find("EKF-SLAM") == std::string::npos) continue;
+      ++diagnostics_received_;
+      for (const diagnostic_msgs::KeyValue& kv : status.values) diagnostics_[kv.key] = kv.value;
+    }
+  }
+  void onMap(const ekf_slam::LandmarkMap& map) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map_ = map;
+    ++maps_;
+  }
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped& pose) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++poses_;
+    last_pose_stamp_ = pose.header.stamp;
+    pose_ = pose;
+  }
+  void onLog(const rosgraph_msgs::Log& log) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (log.name == kNode) {
+      log_.push_back(log.msg);
+    } else {
+      ++other_lines_;
+    }
+  }
+  void onGrid(const nav_msgs::OccupancyGrid& grid) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    grid_ = grid;
+  }
+  void onFeatures(const ekf_slam::Features& features) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    features_ = features;
+  }
+  void onAssociation(const ekf_slam::AssociationReport& report) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!report.observations.empty()) association_ = report;
+  }
+  void onSmoothedPath(const nav_msgs::Path& path) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    smoothed_poses_ = path.poses.size();
+  }
+
+  ros::NodeHandle node_;
+  std::vector<ros::Subscriber> subscribers_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> diagnostics_;
+  long diagnostics_received_ = 0;
+  ekf_slam::LandmarkMap map_;
+  long maps_ = 0, poses_ = 0;
+  ros::Time last_pose_stamp_;
+  geometry_msgs::PoseWithCovarianceStamped pose_;
+  ekf_slam::Features features_;
+  ekf_slam::AssociationReport association_;
+  std::vector<std::string> log_;
+  long other_lines_ = 0;
+  nav_msgs::OccupancyGrid grid_;
+  size_t smoothed_poses_ = 0;
+};
+
+// Waits (wall time) until `condition` holds; false on timeout.
+bool waitFor(const std::function<bool()>& condition, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::WallTime::now() < end) {
+    if (condition()) return true;
+    ros::WallDuration(0.05).sleep();
+  }
+  return condition();
+}
+
+int confirmedLandmarks(const ekf_slam::LandmarkMap& map) {
+  int n = 0;
+  for (const auto& l : map.landmarks) n += !l.tentative;
+  return n;
+}
+
+bool sameLandmarks(const ekf_slam::LandmarkMap& a, const ekf_slam::LandmarkMap& b) {
+  if (a.landmarks.size() != b.landmarks.size()) return false;
+  for (size_t i = 0; i < a.landmarks.size(); ++i) {
+    const auto &p = a.landmarks[i], &q = b.landmarks[i];
+    if (p.id != q.id || p.x != q.x || p.y != q.y || p.covariance != q.covariance) return false;
+  }
+  return true;
+}
+
+class SlamNodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/reset", ros::Duration(30.0)))
+        << "ekf_slam_node did not come up";
+    robot_.start();
+    ASSERT_TRUE(waitFor([&] { return confirmedLandmarks(observer_.map()) >= 3; }, 30.0))
+        << "no map built from the synthetic room: " << observer_.map().landmarks.size()
+        << " landmarks";
+  }
+  void TearDown() override { robot_.stop(); }
+
+  template <typename Service>
+  bool call(const std::string& name, Service* service) {
+    return ros::service::call(std::string(kNode) + "/" + name, *service);
+  }
+  bool trigger(const std::string& name) {
+    std_srvs::Trigger trigger;
+    return call(name, &trigger) && trigger.response.success;
+  }
+  // Waits until a diagnostics report newer than now has arrived.
+  bool freshDiagnostics() {
+    const long seen = observer_.diagnosticsReceived();
+    return waitFor([&] { return observer_.diagnosticsReceived() >= seen + 2; }, 5.0);
+  }
+
+  Observer observer_;
+  Robot robot_;
+};
+
+TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
+  // Freeze the map: no good scans while the bad ones go in (odometry goes on).
+  robot_.publish_scans = false;
+  ros::WallDuration(1.0).sleep();  // queued scans processed
+  ASSERT_TRUE(freshDiagnostics());
+  const ekf_slam::LandmarkMap before = observer_.map();
+  const long maps_before = observer_.maps();
+  const double nan_before = observer_.diagnostic("dropped: too few valid readings");
+  const double past_before = observer_.diagnostic("dropped: stamp not increasing");
+  const double laser_before = observer_.diagnostic("dropped: laser transform missing");
+  const double iterations_before = observer_.diagnostic("iterations");
+  ASSERT_FALSE(std::isnan(nan_before));
+
+  // 1. A scan full of NaN.
+  robot_.publishScan(ros::Time::now(), [](std::vector<float>* r) {
+    std::fill(r->begin(), r->end(), std::numeric_limits<float>::quiet_NaN());
+  });
+  // 2. A good-looking scan stamped 1 s before the last one.
+  robot_.publishScan(robot_.lastGoodStamp() - ros::Duration(1.0), [](std::vector<float>*) {});
+  // 3. Scans while base_link → laser is missing (odom → base_link still there).
+  robot_.publish_laser_tf = false;
+  ros::WallDuration(0.5).sleep();  // the last laser transform is now older than any new scan
+  for (int i = 0; i < 5; ++i) {
+    robot_.publishScan(ros::Time::now(), [](std::vector<float>*) {});
+    ros::WallDuration(0.1).sleep();
+  }
+  // Past tf_timeout (0.3 s) for the last one before the transform comes back,
+  // so that no waiting scan can be interpolated across the gap.
+  ros::WallDuration(1.0).sleep();
+
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_GE(observer_.diagnostic("dropped: too few valid readings"), nan_before + 1);
+  EXPECT_GE(observer_.diagnostic("dropped: stamp not increasing"), past_before + 1);
+  EXPECT_GE(observer_.diagnostic("dropped: laser transform missing"), laser_before + 5);
+  EXPECT_EQ(observer_.diagnostic("iterations"), iterations_before);
+  EXPECT_TRUE(observer_.logged("laser transform missing", "base_link -> laser"))
+      << "the log must name the missing frames";
+  EXPECT_TRUE(observer_.logged("stamp not increasing", "before"));
+  EXPECT_TRUE(observer_.logged("too few valid readings", "0 of 181"));
+  // The map: no new version published, the last one equal to before.
+  EXPECT_EQ(observer_.maps(), maps_before);
+  EXPECT_TRUE(sameLandmarks(observer_.map(), before));
+
+  // Still alive and mapping once the input is good again.
+  robot_.publish_laser_tf = true;
+  robot_.publish_scans = true;
+  const ros::Time resumed = ros::Time::now();
+  EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
+  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations_before; }, 5.0));
+  EXPECT_GT(observer_.maps(), maps_before);
+}
+
+TEST_F(SlamNodeTest, OutputsCarryTheScansStampsAndFrames) {
+  ros::WallDuration(1.0).sleep();
+  // Data time: every output is stamped with the stamp of a scan the robot sent.
+  const ekf_slam::Features features = observer_.features();
+  EXPECT_EQ(features.header.frame_id, "laser");
+  EXPECT_TRUE(robot_.wasScanStamp(features.header.stamp)) << features.header.stamp;
+  EXPECT_FALSE(features.lines.empty()) << "a room has walls";
+  const geometry_msgs::PoseWithCovarianceStamped pose = observer_.pose();
+  EXPECT_EQ(pose.header.frame_id, "map");
+  EXPECT_TRUE(robot_.wasScanStamp(pose.header.stamp)) << pose.header.stamp;
+  EXPECT_GT(pose.pose.covariance[0], 0.0);
+  const ekf_slam::LandmarkMap map = observer_.map();
+  EXPECT_EQ(map.header.frame_id, "map");
+  EXPECT_TRUE(robot_.wasScanStamp(map.header.stamp));
+  const ekf_slam::AssociationReport association = observer_.association();
+  EXPECT_EQ(association.header.frame_id, "laser");
+  EXPECT_TRUE(robot_.wasScanStamp(association.header.stamp));
+  int matched = 0;
+  for (const auto& o : association.observations) {
+    if (o.decision != "matched") continue;
+    ++matched;
+    ASSERT_FALSE(o.candidates.empty());
+    EXPECT_LT(o.candidates[0].mahalanobis_sq, o.gate);
+  }
+  EXPECT_GT(matched, 0) << "a corner seen again is matched";
+}
+
+TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
+  // Pause: scans are dropped, no iteration.
+  ASSERT_TRUE(trigger("pause"));
+  ros::WallDuration(0.5).sleep();
+  ASSERT_TRUE(freshDiagnostics());
+  const double iterations = observer_.diagnostic("iterations");
+  const double paused_drops = observer_.diagnostic("dropped: paused");
+  ros::WallDuration(1.5).sleep();
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_EQ(observer_.diagnostic("iterations"), iterations);
+  EXPECT_GE(observer_.diagnostic("dropped: paused"), paused_drops + 10);
+
+  // Resume: iterations again.
+  ASSERT_TRUE(trigger("resume"));
+  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations + 5; }, 5.0));
+
+  // Save while paused (the map stands still), then compare with the file.
+  ASSERT_TRUE(trigger("pause"));
+  ros::WallDuration(0.5).sleep();
+  const ekf_slam::LandmarkMap saved = observer_.map();
+  ASSERT_GE(saved.landmarks.size(), 3u);
+  char path[] = "/tmp/slam_node_map_XXXXXX";
+  const int fd = ::mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ::close(fd);
+  ekf_slam::SaveMap save;
+  save.request.path = path;
+  ASSERT_TRUE(call("save_map", &save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  LandmarkMapFile file;
+  ASSERT_EQ(readLandmarkMap(path, &file), "");
+  ASSERT_EQ(file.landmarks.size(), saved.landmarks.size());
+  for (size_t i = 0; i < file.landmarks.size(); ++i) {
+    EXPECT_EQ(file.landmarks[i].id, saved.landmarks[i].id);
+    EXPECT_EQ(file.landmarks[i].position.x(), saved.landmarks[i].x);
+    EXPECT_EQ(file.landmarks[i].covariance(0, 1), saved.landmarks[i].covariance[1]);
+  }
+
+  // Reset: an empty map.
+  ASSERT_TRUE(trigger("reset"));
+  EXPECT_TRUE(waitFor([&] { return observer_.map().landmarks.empty(); }, 3.0));
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_EQ(observer_.diagnostic("landmarks"), 0.0);
+
+  // A bad file is refused and changes nothing.
+  ekf_slam::LoadMap bad;
+  bad.request.path = "/nonexistent/map.yaml";
+  ASSERT_TRUE(call("load_map", &bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("cannot open"), std::string::npos);
+  EXPECT_TRUE(observer_.map().landmarks.empty());
+
+  // Load: the same landmarks, bit for bit.
+  ekf_slam::LoadMap load;
+  load.request.path = path;
+  load.request.localize_only = true;
+  ASSERT_TRUE(call("load_map", &load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_EQ(load.response.landmarks, static_cast<int>(saved.landmarks.size()));
+  EXPECT_TRUE(waitFor([&] { return sameLandmarks(observer_.map(), saved); }, 3.0))
+      << observer_.map().landmarks.size() << " landmarks after load, saved "
+      << saved.landmarks.size();
+  std::remove(path);
+
+  // Localisation only: iterations go on, the map never grows.
+  ASSERT_TRUE(trigger("resume"));
+  ASSERT_TRUE(freshDiagnostics());
+  const double before_localising = observer_.diagnostic("iterations");
+  EXPECT_TRUE(
+      waitFor([&] { return observer_.diagnostic("iterations") > before_localising + 10; }, 5.0));
+  EXPECT_LE(observer_.map().landmarks.size(), saved.landmarks.size());
+  EXPECT_EQ(observer_.diagnosticText("localize only"), "True");
+
+  // Smooth: a smoothed path with one pose per scan since the load and a grid.
+  std_srvs::Trigger smooth;
+  ASSERT_TRUE(call("smooth", &smooth));
+  ASSERT_TRUE(smooth.response.success) << smooth.response.message;
+  EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() > 10; }, 3.0));
+  ASSERT_TRUE(waitFor([&] { return observer_.grid().info.width > 0; }, 3.0));
+  const nav_msgs::OccupancyGrid grid = observer_.grid();
+  EXPECT_EQ(grid.header.frame_id, "map");
+  EXPECT_NEAR(grid.info.resolution, 0.05, 1e-6);
+  int occupied = 0, free_cells = 0;
+  for (int8_t v : grid.data) {
+    occupied += v > 65;
+    free_cells += v >= 0 && v < 35;
+  }
+  EXPECT_GT(occupied, 50) << "the room's walls";
+  EXPECT_GT(free_cells, occupied) << "the room's inside";
+}
+
+}  // namespace
+}  // namespace ekf_slam
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "slam_node_rostest");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  spinner.stop();
+  ros::shutdown();
+  return result;
+}

@@ -1,0 +1,135 @@
+#include "ekf_slam_ros/waypoints/pure_pursuit.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace ekf_slam {
+namespace waypoints {
+
+double pursuitCurvature(const Pose2& robot, const Vector2& target) {
+  const Vector2 local = transformTo(robot, target);
+  const double distance_squared = local.squaredNorm();
+  if (distance_squared < 1e-12) return 0.0;
+  return 2.0 * local.y() / distance_squared;
+}
+
+std::vector<Vector2> expandLaps(const std::vector<Vector2>& waypoints, int laps, bool closed) {
+  std::vector<Vector2> path;
+  if (waypoints.empty() || laps < 1) return path;
+  if (!closed) laps = 1;
+  for (int lap = 0; lap < laps; ++lap) {
+    // Later laps start where the previous one closed: at waypoint 0.
+    path.insert(path.end(), waypoints.begin() + (lap == 0 ? 0 : 1), waypoints.end());
+    if (closed) path.push_back(waypoints.front());
+  }
+  return path;
+}
+
+PurePursuit::PurePursuit(std::vector<Vector2> path, PursuitOptions options)
+    : path_(std::move(path)), options_(options) {
+  assert(path_.size() >= 2);
+  cumulative_.assign(path_.size(), 0.0);
+  for (size_t i = 1; i < path_.size(); ++i) {
+    cumulative_[i] = cumulative_[i - 1] + (path_[i] - path_[i - 1]).norm();
+  }
+  remaining_ = cumulative_.back();
+  lookahead_point_ = path_.front();
+}
+
+double PurePursuit::project(size_t i, const Vector2& p, double* distance) const {
+  const Vector2 a = path_[i], b = path_[i + 1];
+  const double length_squared = (b - a).squaredNorm();
+  const double t =
+      length_squared > 1e-12 ? std::clamp((p - a).dot(b - a) / length_squared, 0.0, 1.0) : 1.0;
+  *distance = (p - (a + t * (b - a))).norm();
+  return t;
+}
+
+Vector2 PurePursuit::pointAt(double arc_length) const {
+  if (arc_length >= cumulative_.back()) return path_.back();
+  const size_t i =
+      static_cast<size_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), arc_length) -
+                          cumulative_.begin() - 1);
+  const double length = cumulative_[i + 1] - cumulative_[i];
+  const double t = length > 1e-12 ? (arc_length - cumulative_[i]) / length : 0.0;
+  return path_[i] + t * (path_[i + 1] - path_[i]);
+}
+
+VelocityCommand PurePursuit::limit(VelocityCommand wanted, double dt) const {
+  wanted.linear = std::clamp(wanted.linear, -options_.max_linear_speed, options_.max_linear_speed);
+  wanted.angular =
+      std::clamp(wanted.angular, -options_.max_angular_speed, options_.max_angular_speed);
+  const double dv = options_.max_linear_acceleration * dt;
+  const double dw = options_.max_angular_acceleration * dt;
+  VelocityCommand limited;
+  limited.linear = std::clamp(wanted.linear, last_.linear - dv, last_.linear + dv);
+  limited.angular = std::clamp(wanted.angular, last_.angular - dw, last_.angular + dw);
+  return limited;
+}
+
+VelocityCommand PurePursuit::update(const Pose2& pose, double dt) {
+  dt = std::max(dt, 0.0);
+  const Vector2 position = pose.translation();
+  if (done_) {
+    last_ = limit(VelocityCommand{}, dt);
+    return last_;
+  }
+  // Progress along the path: move to the next segment once the robot is past
+  // the end of this one or nearer to the next (cutting a corner). Looking
+  // one segment ahead only, so that a loop's later laps, which pass the same
+  // places, are never skipped to.
+  const size_t last_segment = path_.size() - 2;
+  double distance = 0.0;
+  double t = project(segment_, position, &distance);
+  while (segment_ < last_segment) {
+    double next_distance = 0.0;
+    const double next_t = project(segment_ + 1, position, &next_distance);
+    if (t < 1.0 && next_distance >= distance) break;
+    ++segment_;
+    t = next_t;
+    distance = next_distance;
+  }
+  const double along =
+      cumulative_[segment_] + t * (cumulative_[segment_ + 1] - cumulative_[segment_]);
+  remaining_ = cumulative_.back() - along;
+  const double to_goal = (path_.back() - position).norm();
+  if (segment_ == last_segment && to_goal <= options_.goal_tolerance) {
+    done_ = true;
+    last_ = limit(VelocityCommand{}, dt);
+    return last_;
+  }
+
+  // The goal point; near the end it is the last point itself.
+  lookahead_point_ = pointAt(along + options_.lookahead);
+  if (segment_ == last_segment && to_goal < options_.lookahead) lookahead_point_ = path_.back();
+  const Vector2 local = transformTo(pose, lookahead_point_);
+  const double bearing = std::atan2(local.y(), local.x());
+
+  VelocityCommand wanted;
+  if (std::abs(bearing) > options_.rotate_in_place_angle) {
+    // Turn on the spot, slowing as the bearing closes (no overshoot at the
+    // angular acceleration limit: w ≤ sqrt(2 a |bearing|)).
+    const double w =
+        std::min(options_.max_angular_speed,
+                 std::sqrt(2.0 * options_.max_angular_acceleration * std::abs(bearing)));
+    wanted.angular = std::copysign(w, bearing);
+  } else {
+    const double kappa = pursuitCurvature(pose, lookahead_point_);
+    double v = options_.max_linear_speed;
+    // On tight arcs the angular limit sets the speed.
+    if (std::abs(kappa) * v > options_.max_angular_speed) {
+      v = options_.max_angular_speed / std::abs(kappa);
+    }
+    // Brake so as to stop at the last point: v ≤ sqrt(2 a s).
+    const double left = std::max(remaining_, to_goal);
+    v = std::min(v, std::sqrt(2.0 * options_.max_linear_acceleration * left));
+    wanted.linear = v;
+    wanted.angular = kappa * v;
+  }
+  last_ = limit(wanted, dt);
+  return last_;
+}
+
+}  // namespace waypoints
+}  // namespace ekf_slam

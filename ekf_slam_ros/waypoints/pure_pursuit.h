@@ -1,0 +1,87 @@
+// Pure pursuit along a polyline of waypoints, with speed and acceleration
+// limits. No ROS: the waypoint_driver node feeds it the robot pose from tf
+// and publishes its commands as cmd_vel.
+//
+// Geometry (Coulter, "Implementation of the Pure Pursuit Path Tracking
+// Algorithm", CMU-RI-TR-92-01): the goal point lies `lookahead` metres ahead
+// of the robot's projection onto the path; in the robot frame it is (x, y),
+// at distance d. The circular arc through the robot, tangent to its
+// heading, that reaches it has curvature
+//     kappa = 2 y / d²      (1/m, positive = turn left).
+// The command is v along that arc and w = kappa v. When the goal point lies
+// more than `rotate_in_place_angle` off the heading (behind, at the start
+// of a lap, after an overshoot), the robot turns on the spot first.
+#pragma once
+
+#include <vector>
+
+#include "ekf_slam_core/geometry/pose2.h"
+
+namespace ekf_slam {
+namespace waypoints {
+
+struct PursuitOptions {
+  double lookahead = 0.6;                 // m, distance of the goal point ahead on the path
+  double max_linear_speed = 0.4;          // m/s
+  double max_angular_speed = 1.0;         // rad/s
+  double max_linear_acceleration = 0.3;   // m/s² (also the braking rate before the goal)
+  double max_angular_acceleration = 1.5;  // rad/s²
+  double goal_tolerance = 0.15;           // m, distance to the last point that ends the run
+  double rotate_in_place_angle = 1.2;     // rad, turn on the spot beyond this bearing
+};
+
+struct VelocityCommand {
+  double linear = 0.0;   // m/s
+  double angular = 0.0;  // rad/s
+};
+
+// Curvature (1/m) of the arc from `robot` through `target` (same frame),
+// 2 y / d²; 0 when the target is at the robot.
+double pursuitCurvature(const Pose2& robot, const Vector2& target);
+
+// The waypoints driven `laps` times. With `closed`, each lap ends back at the
+// first waypoint (a loop); an open list can only be driven once.
+std::vector<Vector2> expandLaps(const std::vector<Vector2>& waypoints, int laps, bool closed);
+
+class PurePursuit {
+ public:
+  // `path`: at least two points (the driver prepends the robot's position).
+  PurePursuit(std::vector<Vector2> path, PursuitOptions options);
+
+  // The command for the robot at `pose`, `dt` s (> 0) after the previous
+  // call: limited to the speeds, and changed from the previous command by
+  // at most acceleration × dt. Once done(), it brakes to zero.
+  VelocityCommand update(const Pose2& pose, double dt);
+
+  // The robot came within goal_tolerance of the last point, on its last
+  // segment (so a loop's start, which is also its end, does not count early).
+  bool done() const { return done_; }
+  // Forget the previous command (the robot was stopped from outside, e.g.
+  // while its pose was unknown), so the next one ramps up from rest.
+  void resetCommand() { last_ = VelocityCommand{}; }
+  // Index of the path segment the robot is on (from path[i] to path[i+1]).
+  size_t segment() const { return segment_; }
+  // The goal point of the last update (for display).
+  Vector2 lookaheadPoint() const { return lookahead_point_; }
+  // Path length (m) left from the robot's projection to the last point.
+  double remaining() const { return remaining_; }
+  const VelocityCommand& lastCommand() const { return last_; }
+
+ private:
+  // Closest point of segment i to p: parameter in [0, 1] and distance.
+  double project(size_t i, const Vector2& p, double* distance) const;
+  Vector2 pointAt(double arc_length) const;
+  VelocityCommand limit(VelocityCommand wanted, double dt) const;
+
+  std::vector<Vector2> path_;
+  std::vector<double> cumulative_;  // arc length at each path point
+  PursuitOptions options_;
+  size_t segment_ = 0;
+  bool done_ = false;
+  Vector2 lookahead_point_ = Vector2::Zero();
+  double remaining_ = 0.0;
+  VelocityCommand last_;
+};
+
+}  // namespace waypoints
+}  // namespace ekf_slam

@@ -1,0 +1,182 @@
+#include "ekf_slam_ros/waypoints/pure_pursuit.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace ekf_slam {
+namespace waypoints {
+namespace {
+
+// Moves a unicycle by (v, w) for dt along the exact arc.
+Pose2 drive(const Pose2& pose, const VelocityCommand& command, double dt) {
+  const double distance = command.linear * dt, turn = command.angular * dt;
+  return compose(pose,
+                 Pose2(distance * std::cos(turn / 2.0), distance * std::sin(turn / 2.0), turn));
+}
+
+TEST(PursuitCurvatureTest, PointStraightAheadIsAStraightLine) {
+  EXPECT_DOUBLE_EQ(pursuitCurvature(Pose2(0, 0, 0), Vector2(2.0, 0.0)), 0.0);
+  EXPECT_NEAR(pursuitCurvature(Pose2(1, 1, kPi / 2), Vector2(1.0, 3.0)), 0.0, 1e-12);
+}
+
+TEST(PursuitCurvatureTest, LeftIsPositiveRightIsNegative) {
+  // (1, 1) from the origin facing +x: the circle through both points tangent
+  // to the x axis has radius 1 (centre (0, 1)), so kappa = 2·1 / 2 = 1.
+  EXPECT_NEAR(pursuitCurvature(Pose2(0, 0, 0), Vector2(1.0, 1.0)), 1.0, 1e-12);
+  EXPECT_NEAR(pursuitCurvature(Pose2(0, 0, 0), Vector2(1.0, -1.0)), -1.0, 1e-12);
+  // The same in a rotated, shifted robot frame: facing +y at (2, 3), a point
+  // at (1, 4) is ahead-left.
+  EXPECT_NEAR(pursuitCurvature(Pose2(2, 3, kPi / 2), Vector2(1.0, 4.0)), 1.0, 1e-12);
+  // Straight to the left at distance 0.5: a half circle of radius 0.25.
+  EXPECT_NEAR(pursuitCurvature(Pose2(0, 0, 0), Vector2(0.0, 0.5)), 4.0, 1e-12);
+  EXPECT_EQ(pursuitCurvature(Pose2(1, 1, 0), Vector2(1.0, 1.0)), 0.0);
+}
+
+TEST(PursuitCurvatureTest, ArcReallyPassesThroughTheTarget) {
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
+  for (int i = 0; i < 100; ++i) {
+    const Vector2 target(std::abs(coordinate(random)) + 0.1, coordinate(random));
+    const double kappa = pursuitCurvature(Pose2(), target);
+    // The circle centred at (0, 1/kappa) with radius |1/kappa| contains the target.
+    if (std::abs(kappa) < 1e-9) continue;
+    const Vector2 centre(0.0, 1.0 / kappa);
+    EXPECT_NEAR((target - centre).norm(), std::abs(1.0 / kappa), 1e-9);
+  }
+}
+
+TEST(ExpandLapsTest, ClosedLoopsReturnToTheFirstWaypointEachLap) {
+  const std::vector<Vector2> points{{1, 0}, {1, 1}, {0, 1}};
+  const std::vector<Vector2> two = expandLaps(points, 2, true);
+  ASSERT_EQ(two.size(), 7u);  // 1 0 | 1 1 | 0 1 | 1 0 | 1 1 | 0 1 | 1 0
+  EXPECT_EQ(two[3], points[0]);
+  EXPECT_EQ(two[6], points[0]);
+  EXPECT_EQ(expandLaps(points, 3, false).size(), 3u) << "an open list is driven once";
+  EXPECT_TRUE(expandLaps(points, 0, true).empty());
+}
+
+TEST(PurePursuitTest, TurnsTowardsAPointBehindOnTheSpot) {
+  PursuitOptions options;
+  PurePursuit pursuit({{0, 0}, {-3, 0}}, options);
+  VelocityCommand command;
+  for (int i = 0; i < 10; ++i) command = pursuit.update(Pose2(0, 0, 0), 0.05);
+  EXPECT_EQ(command.linear, 0.0);
+  EXPECT_GT(std::abs(command.angular), 0.5);
+}
+
+TEST(PurePursuitTest, SpeedAndAccelerationLimitsHoldOnRandomPaths) {
+  PursuitOptions options;
+  options.max_linear_speed = 0.5;
+  options.max_angular_speed = 0.8;
+  options.max_linear_acceleration = 0.4;
+  options.max_angular_acceleration = 1.2;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-4.0, 4.0);
+  const double dt = 0.05;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Vector2> path{{0, 0}};
+    for (int i = 0; i < 6; ++i) path.emplace_back(coordinate(random), coordinate(random));
+    PurePursuit pursuit(path, options);
+    Pose2 pose(0, 0, coordinate(random));
+    VelocityCommand previous;
+    int steps = 0;
+    for (; steps < 20000 && !(pursuit.done() && previous.linear == 0.0); ++steps) {
+      const VelocityCommand command = pursuit.update(pose, dt);
+      ASSERT_LE(std::abs(command.linear), options.max_linear_speed + 1e-12);
+      ASSERT_LE(std::abs(command.angular), options.max_angular_speed + 1e-12);
+      ASSERT_LE(std::abs(command.linear - previous.linear),
+                options.max_linear_acceleration * dt + 1e-12);
+      ASSERT_LE(std::abs(command.angular - previous.angular),
+                options.max_angular_acceleration * dt + 1e-12);
+      ASSERT_GE(command.linear, 0.0) << "the driver never reverses";
+      previous = command;
+      pose = drive(pose, command, dt);
+    }
+    // Every random path is finished, at the last point, at rest.
+    EXPECT_TRUE(pursuit.done()) << "trial " << trial;
+    EXPECT_LE((pose.translation() - path.back()).norm(), options.goal_tolerance + 0.05)
+        << "trial " << trial;
+    EXPECT_EQ(previous.linear, 0.0);
+  }
+}
+
+TEST(PurePursuitTest, ReachesTheGoalOnlyOnTheLastSegmentOfALoop) {
+  // A closed square driven twice: the start point is passed twice before the
+  // end, and must not end the run.
+  const std::vector<Vector2> square{{2, 0}, {2, 2}, {0, 2}, {0, 0}};
+  std::vector<Vector2> path{{0, 0}};
+  const std::vector<Vector2> laps = expandLaps(square, 2, true);
+  path.insert(path.end(), laps.begin(), laps.end());
+  PursuitOptions options;
+  options.lookahead = 0.4;
+  PurePursuit pursuit(path, options);
+  Pose2 pose;
+  double driven = 0.0;
+  for (int step = 0; step < 20000 && !pursuit.done(); ++step) {
+    const VelocityCommand command = pursuit.update(pose, 0.05);
+    driven += command.linear * 0.05;
+    pose = drive(pose, command, 0.05);
+  }
+  ASSERT_TRUE(pursuit.done());
+  EXPECT_EQ(pursuit.segment(), path.size() - 2);
+  // Two laps of 8 m plus the way to the first corner, less the corners cut.
+  EXPECT_GT(driven, 17.0);
+  EXPECT_LT(driven, 18.5);
+  EXPECT_LE((pose.translation() - Vector2(2, 0)).norm(), options.goal_tolerance);
+}
+
+TEST(PurePursuitTest, GoalToleranceDecidesDone) {
+  PursuitOptions options;
+  options.goal_tolerance = 0.2;
+  PurePursuit pursuit({{0, 0}, {1, 0}}, options);
+  pursuit.update(Pose2(0.7, 0.0, 0.0), 0.05);
+  EXPECT_FALSE(pursuit.done());
+  pursuit.update(Pose2(0.85, 0.0, 0.0), 0.05);
+  EXPECT_TRUE(pursuit.done());
+  // Once done it only brakes.
+  VelocityCommand command = pursuit.update(Pose2(0.0, 0.0, 0.0), 0.05);
+  EXPECT_EQ(command.linear, 0.0);
+}
+
+TEST(PurePursuitTest, BrakesToStopAtTheGoal) {
+  PursuitOptions options;
+  options.max_linear_acceleration = 0.3;
+  PurePursuit pursuit({{0, 0}, {5, 0}}, options);
+  Pose2 pose;
+  const double dt = 0.05;
+  double fastest = 0.0;
+  for (int step = 0; step < 2000 && !pursuit.done(); ++step) {
+    const VelocityCommand command = pursuit.update(pose, dt);
+    const double to_goal = 5.0 - pose.x;
+    // Never faster than the speed from which the robot can still stop at
+    // the goal (one control step of lag allowed).
+    EXPECT_LE(command.linear, std::sqrt(2.0 * 0.3 * to_goal) + 0.3 * dt + 1e-9)
+        << "at x = " << pose.x;
+    fastest = std::max(fastest, command.linear);
+    pose = drive(pose, command, dt);
+  }
+  EXPECT_TRUE(pursuit.done());
+  EXPECT_NEAR(fastest, options.max_linear_speed, 1e-12) << "cruises at the speed limit";
+  EXPECT_NEAR(pose.y, 0.0, 1e-9);
+}
+
+TEST(PurePursuitTest, AngularLimitSetsTheSpeedOnTightArcs) {
+  PursuitOptions options;
+  options.max_angular_speed = 0.3;
+  // From the origin the goal point, 0.6 m along the first segment, is at
+  // (0.46, 0.38): kappa ≈ 2.1 1/m, so v = 0.3 / 2.1 ≈ 0.14 m/s, not 0.4.
+  PurePursuit tight({{0, 0}, {0.6, 0.5}, {5, 5}}, options);
+  VelocityCommand command;
+  for (int i = 0; i < 100; ++i) command = tight.update(Pose2(0, 0, 0), 0.05);
+  const double kappa = pursuitCurvature(Pose2(0, 0, 0), tight.lookaheadPoint());
+  EXPECT_NEAR(kappa, 2.13, 0.01);
+  EXPECT_NEAR(command.angular, 0.3, 1e-9);
+  EXPECT_NEAR(command.linear, 0.3 / kappa, 1e-9);
+}
+
+}  // namespace
+}  // namespace waypoints
+}  // namespace ekf_slam

@@ -1,0 +1,72 @@
+#!/usr/bin/python3
+"""ekf_slam_node and feature_node refuse bad parameters at start-up.
+
+Each case starts the node with one bad private parameter (or a bad
+configuration file) against the rostest roscore and asserts that it exits
+with code 1 and that its error names the offending key.
+"""
+import os
+import subprocess
+import tempfile
+import unittest
+
+import rostest
+
+
+RUNS = [0]
+
+
+def run_node(node_type, *args):
+    """Runs the node until it exits (at most 30 s); returns (code, output).
+
+    Each run gets its own node name: private parameters stay on the
+    parameter server after a node exits and would leak into the next case.
+    """
+    RUNS[0] += 1
+    name = "param_check_%s_%d" % (node_type, RUNS[0])
+    command = ["rosrun", "ekf_slam", node_type, "__name:=" + name] + list(args)
+    result = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            timeout=30, text=True)
+    return result.returncode, result.stdout
+
+
+class BadParameters(unittest.TestCase):
+    def check(self, node_type, expected, *args):
+        code, output = run_node(node_type, *args)
+        self.assertEqual(code, 1, "%s %s should exit with 1:\n%s" % (node_type, args, output))
+        self.assertIn(expected, output)
+
+    def test_out_of_range_value_names_the_key(self):
+        self.check("ekf_slam_node", "tf_timeout", "_tf_timeout:=-1.0")
+
+    def test_unknown_key_names_the_key(self):
+        self.check("ekf_slam_node", "tf_timout", "_tf_timout:=0.5")
+
+    def test_wrong_type_names_the_key(self):
+        self.check("ekf_slam_node", "scan_queue_size", "_scan_queue_size:=many")
+
+    def test_same_frames_are_refused(self):
+        self.check("ekf_slam_node", "map_frame", "_map_frame:=odom")
+
+    def test_bad_configuration_file_names_the_yaml_key(self):
+        with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
+            f.write("filter:\n  motion_noise:\n    rot_per_rot: -1\n")
+            path = f.name
+        try:
+            self.check("ekf_slam_node", "filter.motion_noise.rot_per_rot",
+                       "_config_file:=" + path)
+            self.check("feature_node", "filter.motion_noise.rot_per_rot",
+                       "_config_file:=" + path)
+        finally:
+            os.unlink(path)
+
+    def test_unreadable_initial_map_is_reported(self):
+        self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",
+                   "_initial_map:=/nonexistent/landmarks.yaml")
+
+    def test_feature_node_unknown_key(self):
+        self.check("feature_node", "scan_topc", "_scan_topc:=scan")
+
+
+if __name__ == "__main__":
+    rostest.rosrun("ekf_slam", "slam_node_params", BadParameters)

@@ -1,0 +1,434 @@
+#!/usr/bin/python3
+"""Watches a simulated SLAM run (sim.launch) and scores it against the
+simulator's ground truth: used by `make demo` (writes output/) and by the
+office-loop rostest (test/sim_office_loop.test asserts on the same numbers).
+
+It records the SLAM pose (`pose`, map frame, with covariance), the robot's
+own odometry (`odom`) and the truth (`ground_truth/odom`, world frame) until
+the waypoint driver reports `done`, then asks the SLAM node to smooth and to
+save its landmark map, and writes into OUT:
+  trajectory_slam.txt, trajectory_odometry.txt, trajectory_true.txt
+      `stamp x y theta`, all in the SLAM map frame
+  landmarks.yaml   the SLAM node's own save_map file
+  report.txt       final and mean pose errors, average NEES with its band,
+                   landmarks, duplicates
+  demo.png         the world, the landmarks with 95 % ellipses and the three
+                   paths
+
+Frames. The SLAM map frame is the robot's pose at the first SLAM iteration;
+the truth is in the world. The two are tied at the first SLAM pose:
+T_world_map = truth(t0) * slam(t0)^-1, and likewise for odometry, so every
+error below is what the estimate accumulated after t0.
+
+usage (as a ROS node): sim_monitor.py --out DIR [--world office] [--timeout S]
+"""
+import argparse
+import math
+import os
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+# --- SE(2) helpers on (x, y, theta) tuples ---------------------------------
+def wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def compose(a, b):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))
+
+
+def inverse(a):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (-c * a[0] - s * a[1], s * a[0] - c * a[1], wrap(-a[2]))
+
+
+def transform_point(a, p):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * p[0] - s * p[1], a[1] + s * p[0] + c * p[1])
+
+
+def interpolate(track, t):
+    """Pose of a time-sorted [(t, x, y, th)] track at t (None outside it)."""
+    if not track or t < track[0][0] or t > track[-1][0]:
+        return None
+    lo, hi = 0, len(track) - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if track[mid][0] <= t:
+            lo = mid
+        else:
+            hi = mid
+    a, b = track[lo], track[hi]
+    if b[0] == a[0]:
+        return a[1:4]
+    f = (t - a[0]) / (b[0] - a[0])
+    return (a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]), wrap(a[3] + f * wrap(b[3] - a[3])))
+
+
+# --- statistics -------------------------------------------------------------
+def chi2_quantile(p, dof):
+    """Wilson-Hilferty approximation of the chi-square quantile (good to
+    ~1 % for dof >= 3, plenty for a band)."""
+    # Standard normal quantile by bisection on erf.
+    lo, hi = -10.0, 10.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if 0.5 * (1.0 + math.erf(mid / math.sqrt(2.0))) < p:
+            lo = mid
+        else:
+            hi = mid
+    z = 0.5 * (lo + hi)
+    k = float(dof)
+    return k * (1.0 - 2.0 / (9.0 * k) + z * math.sqrt(2.0 / (9.0 * k))) ** 3
+
+
+def effective_samples(values):
+    """N / (1 + 2 sum of autocorrelations up to the first negative one): the
+    number of independent samples a time-correlated series is worth."""
+    x = np.asarray(values, dtype=float)
+    n = len(x)
+    if n < 4:
+        return float(n)
+    x = x - x.mean()
+    var = float(np.dot(x, x)) / n
+    if var <= 0.0:
+        return float(n)
+    tau = 1.0
+    for lag in range(1, n // 2):
+        rho = float(np.dot(x[:-lag], x[lag:])) / (n * var)
+        if rho <= 0.0:
+            break
+        tau += 2.0 * rho
+    return max(1.0, n / tau)
+
+
+def nees_band(dof, samples, confidence=0.95):
+    """Two-sided band of the average of `samples` independent chi-square(dof)
+    values."""
+    total = dof * samples
+    alpha = 1.0 - confidence
+    return (chi2_quantile(alpha / 2.0, total) / samples,
+            chi2_quantile(1.0 - alpha / 2.0, total) / samples)
+
+
+# --- world truth ---------------------------------------------------------------
+def world_vertices(world):
+    """Corners of the world's polygons (world frame), from tools/make_worlds.py."""
+    sys.path.insert(0, HERE)
+    import make_worlds  # noqa: E402  (the generator of config/worlds)
+    segments = getattr(make_worlds, world)()[0]
+    vertices = set()
+    for a, b in segments:
+        vertices.add((round(a[0], 3), round(a[1], 3)))
+        vertices.add((round(b[0], 3), round(b[1], 3)))
+    return sorted(vertices)
+
+
+def read_world_image(yaml_path):
+    """Occupied cell centres (world frame) of a map_server world."""
+    import yaml
+    with open(yaml_path) as f:
+        meta = yaml.safe_load(f)
+    image = os.path.join(os.path.dirname(yaml_path), meta["image"])
+    with open(image, "rb") as f:
+        data = f.read()
+    # P5 header: magic, optional comments, width height, maxval.
+    tokens, pos = [], 0
+    while len(tokens) < 4:
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        if data[pos:pos + 1] == b"#":
+            pos = data.index(b"\n", pos) + 1
+            continue
+        end = pos
+        while not data[end:end + 1].isspace():
+            end += 1
+        tokens.append(data[pos:end])
+        pos = end
+    width, height = int(tokens[1]), int(tokens[2])
+    pixels = np.frombuffer(data[pos + 1:pos + 1 + width * height], dtype=np.uint8)
+    pixels = pixels.reshape(height, width)
+    res = float(meta["resolution"])
+    ox, oy = meta["origin"][0], meta["origin"][1]
+    rows, cols = np.nonzero(pixels < 128)
+    xs = ox + (cols + 0.5) * res
+    ys = oy + (height - 1 - rows + 0.5) * res
+    return xs, ys
+
+
+# --- scoring ------------------------------------------------------------------
+# Uncertainty of the comparison itself, added to the filter's covariance for
+# the NEES: the truth is integrated in 10 ms simulator steps and published at
+# 50 Hz, and a pose is matched to it by stamps taken in two processes (the
+# scan's first-beam stamp is estimated by the LMS200 driver), a few ms apart:
+# ~2 mm at 0.4 m/s and ~1 mrad at 0.3 rad/s. Without it the first metres,
+# where the filter's σ is a fraction of a millimetre, dominate the average.
+TRUTH_SIGMA = (0.002, 0.002, 0.001)  # m, m, rad
+
+
+def score(truth, slam, odom, landmarks, vertices):
+    """truth/odom: [(t, x, y, th)] (world / odom frame); slam: [(t, x, y, th,
+    cov3x3)] (map frame); landmarks: [(id, x, y, cov2x2)] (map frame);
+    vertices: [(x, y)] world. Returns a dict of results plus the aligned
+    tracks."""
+    usable = [s for s in slam if interpolate(truth, s[0]) is not None]
+    if len(usable) < 2:
+        raise RuntimeError("fewer than 2 SLAM poses overlap the ground truth in time")
+    t0 = usable[0][0]
+    world_map = compose(interpolate(truth, t0), inverse(usable[0][1:4]))
+    map_world = inverse(world_map)
+    odom0 = interpolate(odom, t0)
+    if odom0 is None:
+        raise RuntimeError("no odometry at the first SLAM pose")
+    map_odom = compose(usable[0][1:4], inverse(odom0))
+
+    rows = []
+    nees = []
+    for s in usable:
+        t = s[0]
+        true_map = compose(map_world, interpolate(truth, t))
+        est = s[1:4]
+        e = np.array([est[0] - true_map[0], est[1] - true_map[1], wrap(est[2] - true_map[2])])
+        cov = np.asarray(s[4]) + np.diag(np.square(TRUTH_SIGMA))
+        try:
+            nees.append(float(e @ np.linalg.solve(cov, e)))
+        except np.linalg.LinAlgError:
+            pass
+        o = interpolate(odom, t)
+        odom_map = compose(map_odom, o) if o is not None else None
+        rows.append((t, est, true_map, odom_map, e, np.sqrt(np.maximum(np.diag(cov), 0.0)),
+                     nees[-1] if nees else float("nan")))
+
+    last = rows[-1]
+    final_pos = math.hypot(last[4][0], last[4][1])
+    final_head = abs(math.degrees(last[4][2]))
+    mean_pos = float(np.mean([math.hypot(r[4][0], r[4][1]) for r in rows]))
+    odom_rows = [r for r in rows if r[3] is not None]
+    lo = odom_rows[-1]
+    odom_final_pos = math.hypot(lo[3][0] - lo[2][0], lo[3][1] - lo[2][1])
+    odom_final_head = abs(math.degrees(wrap(lo[3][2] - lo[2][2])))
+    odom_mean_pos = float(np.mean([math.hypot(r[3][0] - r[2][0], r[3][1] - r[2][1])
+                                   for r in odom_rows]))
+    n_eff = effective_samples(nees) if nees else 0.0
+    band = nees_band(3, n_eff) if n_eff >= 1 else (float("nan"), float("nan"))
+
+    # Duplicates: two landmarks statistically at the same place (3 sigma on
+    # their difference) next to the same true corner.
+    verts_map = [transform_point(map_world, v) for v in vertices]
+    nearest = {}
+    for lm in landmarks:
+        best, best_d = None, 0.3
+        for k, v in enumerate(verts_map):
+            d = math.hypot(lm[1] - v[0], lm[2] - v[1])
+            if d < best_d:
+                best, best_d = k, d
+        if best is not None:
+            nearest.setdefault(best, []).append(lm)
+    duplicates = []
+    for group in nearest.values():
+        for i in range(len(group)):
+            for j in range(i + 1, len(group)):
+                a, b = group[i], group[j]
+                d = np.array([a[1] - b[1], a[2] - b[2]])
+                c = np.asarray(a[3]) + np.asarray(b[3])
+                if float(d @ np.linalg.solve(c, d)) < 11.83:
+                    duplicates.append((a[0], b[0]))
+    return {
+        "poses": len(rows),
+        "duration": rows[-1][0] - rows[0][0],
+        "final_position_error": final_pos,
+        "final_heading_error_deg": final_head,
+        "mean_position_error": mean_pos,
+        "odometry_final_position_error": odom_final_pos,
+        "odometry_final_heading_error_deg": odom_final_head,
+        "odometry_mean_position_error": odom_mean_pos,
+        "nees_average": float(np.mean(nees)) if nees else float("nan"),
+        "nees_samples": len(nees),
+        "nees_effective_samples": n_eff,
+        "nees_band_95": band,
+        "landmarks": len(landmarks),
+        "landmarks_near_true_corners": sum(len(g) for g in nearest.values()),
+        "duplicates": duplicates,
+        "rows": rows,
+        "map_world": map_world,
+    }
+
+
+def report_text(r):
+    return "\n".join([
+        "SLAM poses scored: %d over %.1f s" % (r["poses"], r["duration"]),
+        "final pose error: %.3f m, %.2f deg (odometry alone: %.3f m, %.2f deg)" % (
+            r["final_position_error"], r["final_heading_error_deg"],
+            r["odometry_final_position_error"], r["odometry_final_heading_error_deg"]),
+        "mean position error: %.3f m (odometry alone: %.3f m)" % (
+            r["mean_position_error"], r["odometry_mean_position_error"]),
+        "average pose NEES: %.2f over %d poses (%.0f independent), 95%% band %.2f..%.2f "
+        "(truth matched to %.0f mm, %.0f mrad)" % (
+            r["nees_average"], r["nees_samples"], r["nees_effective_samples"],
+            r["nees_band_95"][0], r["nees_band_95"][1], 1e3 * TRUTH_SIGMA[0], 1e3 * TRUTH_SIGMA[2]),
+        "landmarks: %d (%d within 0.3 m of a true corner), duplicated: %d" % (
+            r["landmarks"], r["landmarks_near_true_corners"], len(r["duplicates"])),
+    ]) + "\n"
+
+
+def write_outputs(out, r, landmarks, world_yaml):
+    os.makedirs(out, exist_ok=True)
+    names = {"slam": 1, "true": 2, "odometry": 3}
+    for name, k in names.items():
+        with open(os.path.join(out, "trajectory_%s.txt" % name), "w") as f:
+            f.write("# stamp x y theta  (SLAM map frame)\n")
+            for row in r["rows"]:
+                p = row[k]
+                if p is not None:
+                    f.write("%.6f %.4f %.4f %.5f\n" % (row[0], p[0], p[1], p[2]))
+    with open(os.path.join(out, "errors.txt"), "w") as f:
+        f.write("# stamp  error x y theta (SLAM - truth, map frame; m, m, rad)  "
+                "sigma x y theta (the filter's)  NEES\n")
+        for row in r["rows"]:
+            e, sd = row[4], row[5]
+            f.write("%.6f %.4f %.4f %.5f %.4f %.4f %.5f %.2f\n" % (
+                row[0], e[0], e[1], e[2], sd[0], sd[1], sd[2], row[6]))
+    with open(os.path.join(out, "report.txt"), "w") as f:
+        f.write(report_text(r))
+    plot(os.path.join(out, "demo.png"), r, landmarks, world_yaml)
+
+
+def plot(path, r, landmarks, world_yaml):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(10, 6.5))
+    if world_yaml and os.path.exists(world_yaml):
+        xs, ys = read_world_image(world_yaml)
+        m = r["map_world"]
+        c, s = math.cos(m[2]), math.sin(m[2])
+        ax.scatter(m[0] + c * xs - s * ys, m[1] + s * xs + c * ys, s=1.0, c="0.7",
+                   marker="s", linewidths=0, label="world (truth)", rasterized=True)
+    for k, label, style in [(2, "ground truth", "k-"), (3, "odometry", "r--"), (1, "SLAM", "b-")]:
+        pts = [row[k] for row in r["rows"] if row[k] is not None]
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], style, lw=1.2, label=label)
+    t = np.linspace(0.0, 2.0 * math.pi, 40)
+    for i, lm in enumerate(landmarks):
+        w, v = np.linalg.eigh(np.asarray(lm[3]))
+        axes = np.sqrt(np.maximum(w, 0.0) * 5.991)  # 95 %, 2 dof
+        e = v @ np.vstack([axes[0] * np.cos(t), axes[1] * np.sin(t)])
+        ax.plot(lm[1] + e[0], lm[2] + e[1], "g-", lw=0.8,
+                label="landmarks, 95 % ellipses" if i == 0 else None)
+        ax.plot(lm[1], lm[2], "g+", ms=4)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m] (map frame)")
+    ax.set_ylabel("y [m]")
+    ax.set_title("final error %.3f m / %.2f deg (odometry %.2f m), NEES %.2f" % (
+        r["final_position_error"], r["final_heading_error_deg"],
+        r["odometry_final_position_error"], r["nees_average"]))
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- the ROS side ----------------------------------------------------------------
+class Recorder:
+    def __init__(self, slam_node):
+        import rospy
+        from geometry_msgs.msg import PoseWithCovarianceStamped
+        from nav_msgs.msg import Odometry
+        from std_msgs.msg import Bool
+        self.truth, self.slam, self.odom = [], [], []
+        self.done = False
+        self.slam_node = slam_node
+        rospy.Subscriber("ground_truth/odom", Odometry, self._truth, queue_size=200)
+        rospy.Subscriber("odom", Odometry, self._odom, queue_size=200)
+        rospy.Subscriber("pose", PoseWithCovarianceStamped, self._slam, queue_size=200)
+        rospy.Subscriber("waypoint_driver/done", Bool, self._done, queue_size=2)
+
+    @staticmethod
+    def _yaw(q):
+        return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+    def _append(self, track, stamp, pose, extra=None):
+        t = stamp.to_sec()
+        if track and t <= track[-1][0]:
+            return  # keep the track time-sorted
+        row = (t, pose.position.x, pose.position.y, self._yaw(pose.orientation))
+        track.append(row + ((extra,) if extra is not None else ()))
+
+    def _truth(self, msg):
+        self._append(self.truth, msg.header.stamp, msg.pose.pose)
+
+    def _odom(self, msg):
+        self._append(self.odom, msg.header.stamp, msg.pose.pose)
+
+    def _slam(self, msg):
+        c = msg.pose.covariance
+        cov = [[c[0], c[1], c[5]], [c[6], c[7], c[11]], [c[30], c[31], c[35]]]
+        self._append(self.slam, msg.header.stamp, msg.pose.pose, cov)
+
+    def _done(self, msg):
+        self.done = self.done or msg.data
+
+    def finish(self, out):
+        """Smooth, save the landmark map into `out`, return the landmarks."""
+        import rospy
+        import yaml
+        from std_srvs.srv import Trigger
+        from ekf_slam.srv import SaveMap
+        os.makedirs(out, exist_ok=True)
+        try:
+            rospy.wait_for_service(self.slam_node + "/smooth", 10.0)
+            rospy.ServiceProxy(self.slam_node + "/smooth", Trigger)()
+        except Exception as e:  # the score does not depend on it
+            rospy.logwarn("sim_monitor: smooth failed: %s", e)
+        path = os.path.join(os.path.abspath(out), "landmarks.yaml")
+        rospy.wait_for_service(self.slam_node + "/save_map", 10.0)
+        answer = rospy.ServiceProxy(self.slam_node + "/save_map", SaveMap)(path)
+        if not answer.success:
+            raise RuntimeError("save_map failed: " + answer.message)
+        with open(path) as f:
+            data = yaml.safe_load(f)
+        landmarks = []
+        for lm in data.get("landmarks", []) or []:
+            c = lm["covariance"]
+            cov = [[c[0], c[1]], [c[2], c[3]]] if len(c) == 4 else [[c[0], c[1]], [c[1], c[2]]]
+            landmarks.append((lm["id"], lm["x"], lm["y"], cov))
+        return landmarks
+
+
+def run(args):
+    import rospy
+    rospy.init_node("sim_monitor")
+    recorder = Recorder(args.slam_node)
+    start = time.time()
+    rate = rospy.Rate(5)
+    while not rospy.is_shutdown() and not recorder.done:
+        if time.time() - start > args.timeout:
+            raise RuntimeError("the waypoint driver did not finish within %.0f s" % args.timeout)
+        rate.sleep()
+    rospy.sleep(1.0)  # the last scan's pose
+    landmarks = recorder.finish(args.out)
+    result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
+                   world_vertices(args.world))
+    world_yaml = os.path.join(HERE, "..", "config", "worlds", args.world + ".yaml")
+    write_outputs(args.out, result, landmarks, world_yaml)
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--world", default="office")
+    parser.add_argument("--timeout", type=float, default=600.0)
+    parser.add_argument("--slam-node", default="/ekf_slam")
+    args, _ = parser.parse_known_args([a for a in sys.argv[1:] if not a.startswith("__")])
+    result = run(args)
+    sys.stdout.write(report_text(result))
+
+
+if __name__ == "__main__":
+    main()
