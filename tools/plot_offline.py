@@ -58,6 +58,18 @@ def trajectory(out_dir, name):
     return np.atleast_2d(np.loadtxt(os.path.join(out_dir, "trajectory_%s.txt" % name)))
 
 
+def in_frame_of(traj, first_pose):
+    """traj (stamp x y theta rows) moved rigidly so that its first pose is first_pose."""
+    d_theta = first_pose[3] - traj[0, 3]
+    c, s = np.cos(d_theta), np.sin(d_theta)
+    out = traj.copy()
+    dx, dy = traj[:, 1] - traj[0, 1], traj[:, 2] - traj[0, 2]
+    out[:, 1] = first_pose[1] + c * dx - s * dy
+    out[:, 2] = first_pose[2] + s * dx + c * dy
+    out[:, 3] = traj[:, 3] + d_theta
+    return out
+
+
 def crop_to(ax, traj, margin=5.0):
     ax.set_xlim(traj[:, 1].min() - margin, traj[:, 1].max() + margin)
     ax.set_ylim(traj[:, 2].min() - margin, traj[:, 2].max() + margin)
@@ -70,12 +82,18 @@ def main(out_dir):
 
     fig, axes = plt.subplots(1, 2, figsize=(14, 7))
     show_map(axes[0], out_dir, "map", "EKF-SLAM (smoothed) map and path")
-    axes[0].plot(smoothed[:, 1], smoothed[:, 2], color="tab:blue", lw=0.6)
+    axes[0].plot(smoothed[:, 1], smoothed[:, 2], color="tab:blue", lw=0.6, label="smoothed path")
+    # The scan-matching front end's own track (the filter's control), when it ran.
+    if os.path.exists(os.path.join(out_dir, "trajectory_scan_matched.txt")):
+        # It lives in the odometry frame: place its first pose on the smoothed one.
+        matched = in_frame_of(trajectory(out_dir, "scan_matched"), smoothed[0])
+        axes[0].plot(matched[:, 1], matched[:, 2], color="tab:green", lw=0.5, ls="--",
+                     label="scan-matched control")
     landmarks = yaml.safe_load(open(os.path.join(out_dir, "landmarks.yaml")))["landmarks"] or []
     if landmarks:
         axes[0].scatter([l["x"] for l in landmarks], [l["y"] for l in landmarks], s=4,
                         color="tab:red", label="landmarks")
-        axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].legend(loc="upper right", fontsize=8)
     crop_to(axes[0], smoothed)
     show_map(axes[1], out_dir, "map_odometry", "odometry only")
     axes[1].plot(odometry[:, 1], odometry[:, 2], color="tab:red", lw=0.6)

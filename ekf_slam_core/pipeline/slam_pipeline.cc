@@ -36,20 +36,56 @@ std::string PipelineOptions::validate() const {
   if (!(min_travel_distance >= 0.0)) return "min_travel_distance must be >= 0 (m)";
   if (!(min_travel_angle >= 0.0)) return "min_travel_angle must be >= 0 (rad)";
   if (!(max_landmark_range > 0.0)) return "max_landmark_range must be > 0 (m)";
+  if (prune_min_observations < 0) return "prune_min_observations must be >= 0";
+  if (prune_age_steps < 1) return "prune_age_steps must be >= 1";
+  error = scan_matching.validate();
+  if (!error.empty()) return "scan_matching: " + error;
+  error = scan_matched_motion_noise.validate();
+  if (!error.empty()) return "scan_matching.motion_noise: " + error;
   return "";
 }
 
+MotionNoiseOptions PipelineOptions::defaultScanMatchedMotionNoise() {
+  MotionNoiseOptions noise;
+  noise.rot_per_rot = 0.0004;      // 2 % of the turn (1 sigma)
+  noise.rot_per_trans = 0.0001;    // 0.6 deg per m driven
+  noise.trans_per_trans = 0.0004;  // 2 % of the distance
+  noise.trans_per_rot = 0.0001;    // 1 cm per rad turned
+  noise.min_rot_sigma = 0.002;     // rad (0.11 deg) per step: the matcher's own jitter
+  noise.min_trans_sigma = 0.005;   // m per step
+  return noise;
+}
+
+namespace {
+FilterOptions filterOptionsFor(const PipelineOptions& options) {
+  FilterOptions filter = options.filter;
+  if (options.scan_matching.enabled) filter.motion_noise = options.scan_matched_motion_noise;
+  return filter;
+}
+}  // namespace
+
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
-    : options_(options), filter_(options.filter, Pose2(), options.initial_pose_covariance) {}
+    : options_(options),
+      scan_matcher_(options.scan_matching.enabled
+                        ? std::make_unique<ScanMatchingOdometry>(options.scan_matching)
+                        : nullptr),
+      filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {}
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
   return compose(filter_.pose(), between(last_odometry_, odometry));
 }
 
-Pose2 SlamPipeline::mapToOdom() const { return compose(filter_.pose(), inverse(last_odometry_)); }
+// Against the robot's raw odometry frame (what odom → base_link on tf
+// carries), also when the control is scan-matched.
+Pose2 SlamPipeline::mapToOdom() const {
+  return compose(filter_.pose(), inverse(last_raw_odometry_));
+}
 
-ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
+ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry) {
   ++counters_.scans;
+  // Below, `odometry` is the control source's pose: scan-matched or raw.
+  Pose2 odometry = raw_odometry;
+  current_raw_odometry_ = raw_odometry;
   ScanResult out;
   auto record = [&]() {
     ScanRecord r;
@@ -62,7 +98,21 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
   };
 
   const std::string scan_error = validateScan(scan);
-  if (!odometry.allFinite() || !scan_error.empty() || !std::isfinite(scan.stamp)) {
+  const bool usable = odometry.allFinite() && scan_error.empty() && std::isfinite(scan.stamp);
+  if (scan_matcher_ && odometry.allFinite()) {
+    if (usable) {
+      MatchResult match;
+      odometry = scan_matcher_->process(scan, raw_odometry, options_.filter.laser_pose, &match);
+      if (match.ok) {
+        ++counters_.scan_matches;
+      } else {
+        ++counters_.scan_match_refusals;
+      }
+    } else {
+      odometry = scan_matcher_->deadReckon(raw_odometry);
+    }
+  }
+  if (!usable) {
     ++counters_.bad_input;
     out.outcome = ScanOutcome::kRejectedBadInput;
     out.message = !odometry.allFinite() ? "odometry pose is not finite"
@@ -79,6 +129,7 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
 
   if (!initialised_) {
     last_odometry_ = odometry;
+    last_raw_odometry_ = raw_odometry;
     last_stamp_ = scan.stamp;
     initialised_ = true;
     iterate(scan, odometry, /*predict=*/false, 0.0, &out);
@@ -131,6 +182,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
         out->outcome = ScanOutcome::kRejectedOdometryJump;
         message << "; odometry re-anchored, the increment is discarded";
         last_odometry_ = odometry;  // re-anchor: later increments start from here
+        last_raw_odometry_ = current_raw_odometry_;
         last_stamp_ = scan.stamp;
       } else {
         ++counters_.bad_input;
@@ -143,6 +195,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
     recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
   }
   last_odometry_ = odometry;
+  last_raw_odometry_ = current_raw_odometry_;
   last_stamp_ = scan.stamp;
 
   out->features = extractFeatures(scan, options_.features);
@@ -162,6 +215,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   counters_.observations += static_cast<long>(out->observations.size());
   counters_.matches += static_cast<long>(out->iteration.matches.size());
   counters_.pruned += out->iteration.pruned;
+  counters_.pruned_rare += pruneRarelySeen();
   for (const ObservationAssociation& a : out->iteration.association.observations) {
     if (a.decision == AssociationDecision::kAmbiguous) ++counters_.ambiguous;
   }
@@ -169,6 +223,19 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   for (double nis : out->iteration.nis) counters_.nis_sum += nis;
   out->outcome = ScanOutcome::kIterated;
   out->pose = filter_.pose();
+}
+
+int SlamPipeline::pruneRarelySeen() {
+  if (options_.prune_min_observations <= 0) return 0;
+  std::vector<int> ids;
+  for (const LandmarkInfo& info : filter_.landmarks()) {
+    if (info.observations < options_.prune_min_observations &&
+        filter_.step() - info.created_step >= options_.prune_age_steps) {
+      ids.push_back(info.id);
+    }
+  }
+  for (int id : ids) filter_.removeLandmark(id);
+  return static_cast<int>(ids.size());
 }
 
 std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {

@@ -19,12 +19,14 @@
 // - A scan whose geometry is unusable: no iteration, pose dead-reckoned.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_core/features/extract_features.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
 namespace ekf_slam {
@@ -37,6 +39,24 @@ struct PipelineOptions {
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
+  // Map management: a landmark matched fewer than prune_min_observations
+  // times (its creation included) once prune_age_steps iterations old is
+  // removed. Corners of people, chairs and doors that moved are seen a few
+  // times and never again, yet each costs O(n) per update forever.
+  int prune_min_observations = 4;  // 0: keep every landmark that survived tentative pruning
+  long prune_age_steps = 100;      // iterations a landmark has to gather its observations
+  // Control source. With scan_matching.enabled every scan is first aligned to
+  // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
+  // the place of the raw odometry pose everywhere below: the filter's control
+  // is then the scan-matched increment, with scan_matched_motion_noise as its
+  // noise. Disabled: the raw odometry increment with filter.motion_noise
+  // (the thesis's mode).
+  ScanMatcherOptions scan_matching;
+  MotionNoiseOptions scan_matched_motion_noise = defaultScanMatchedMotionNoise();
+
+  // Noise of a scan-matched increment: a few millimetres and a tenth of a
+  // degree per step, growing slowly with the motion (docs/offline.md).
+  static MotionNoiseOptions defaultScanMatchedMotionNoise();
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -72,15 +92,18 @@ struct PipelineCounters {
   long matches = 0;
   long ambiguous = 0;  // between the gates, or lost to a better observation
   long new_landmarks = 0;
-  long pruned = 0;       // tentative landmarks removed
-  double nis_sum = 0.0;  // over all matches
+  long pruned = 0;               // tentative landmarks removed
+  long pruned_rare = 0;          // landmarks removed by prune_min_observations
+  long scan_matches = 0;         // scans aligned by the scan matcher
+  long scan_match_refusals = 0;  // scans that fell back to the odometry increment
+  double nis_sum = 0.0;          // over all matches
 };
 
 // One entry per scan, for the trajectory files and the smoother.
 struct ScanRecord {
   double stamp = 0.0;
   Pose2 filtered;      // the pose given for the scan when it was processed
-  Pose2 odometry;      // odom → base_link at the scan
+  Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
   int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
   Pose2 odometry_at_iteration;  // the odometry at that iteration
 };
@@ -90,6 +113,7 @@ class SlamPipeline {
   // Options must be valid (check validate()).
   explicit SlamPipeline(const PipelineOptions& options);
 
+  // `odometry` is the robot's raw odom → base_link at the scan's stamp.
   ScanResult processScan(const Scan& scan, const Pose2& odometry);
 
   const EkfSlam& filter() const { return filter_; }
@@ -101,7 +125,8 @@ class SlamPipeline {
   const std::vector<ScanRecord>& scans() const { return records_; }
   const TrajectoryRecorder& iterations() const { return recorder_; }
 
-  // map → odom, so that map → odom → base_link is the current estimate.
+  // map → odom, so that map → odom → base_link is the estimate at the last
+  // iteration, with odom → base_link the robot's raw odometry.
   Pose2 mapToOdom() const;
 
   // Poses for every scan, from the RTS-smoothed iterations (scans between
@@ -112,14 +137,18 @@ class SlamPipeline {
  private:
   void iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt, ScanResult* out);
   Pose2 deadReckoned(const Pose2& odometry) const;
+  int pruneRarelySeen();  // returns how many landmarks were removed
 
   PipelineOptions options_;
+  std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   PipelineCounters counters_;
   std::vector<ScanRecord> records_;
   bool initialised_ = false;
-  Pose2 last_odometry_;  // odometry at the last iteration (or re-anchor)
+  Pose2 last_odometry_;         // control-source pose at the last iteration (or re-anchor)
+  Pose2 last_raw_odometry_;     // the robot's raw odometry at that iteration
+  Pose2 current_raw_odometry_;  // the raw odometry of the scan being processed
   double last_stamp_ = 0.0;
   Pose2 latest_odometry_;  // odometry at the latest scan
 };

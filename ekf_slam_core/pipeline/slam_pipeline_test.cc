@@ -38,9 +38,11 @@ Scan scanAt(const sim::PolygonWorld& world, const Pose2& laser_in_map, double st
   return scan;
 }
 
-PipelineOptions defaultOptions(const Pose2& laser) {
+// The thesis's mode (raw odometry as the control) unless scan matching is asked for.
+PipelineOptions defaultOptions(const Pose2& laser, bool scan_matching = false) {
   PipelineOptions options;
   options.filter.laser_pose = laser;
+  options.scan_matching.enabled = scan_matching;
   return options;
 }
 
@@ -105,6 +107,55 @@ TEST(SlamPipeline, PoliciesForImperfectInput) {
       1e-12);
 }
 
+// With the scan-matching front end, a fake odometry creep while the scans
+// show the robot standing still is corrected, and map → odom stays defined
+// against the robot's raw odometry (what tf carries).
+TEST(SlamPipeline, ScanMatchedControlFollowsTheScansNotTheOdometry) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(1);
+  SlamPipeline pipeline(defaultOptions(laser, /*scan_matching=*/true));
+  Pose2 odometry;
+  for (int i = 0; i < 10; ++i) {
+    // The robot stands at the origin; its odometry creeps 2 cm and 0.5 deg per scan.
+    const ScanResult r = pipeline.processScan(scanAt(world, laser, 10.0 + 0.1 * i, &rng), odometry);
+    EXPECT_EQ(r.outcome, ScanOutcome::kIterated);
+    EXPECT_LT(std::hypot(r.pose.x, r.pose.y), 0.01) << "scan " << i;
+    EXPECT_LT(std::abs(r.pose.theta), degToRad(0.2)) << "scan " << i;
+    odometry = compose(odometry, Pose2(0.02, 0.0, degToRad(0.5)));
+  }
+  const Pose2 last_raw = compose(odometry, inverse(Pose2(0.02, 0.0, degToRad(0.5))));
+  EXPECT_LT(maxAbsDifference(compose(pipeline.mapToOdom(), last_raw), pipeline.filter().pose()),
+            1e-12);
+  EXPECT_EQ(pipeline.counters().scan_matches, 10);  // the first scan starts the map
+  EXPECT_EQ(pipeline.counters().scan_match_refusals, 0);
+}
+
+// Map management: landmarks with too few sightings for their age go; the
+// well-seen ones stay.
+TEST(SlamPipeline, RarelySeenLandmarksArePrunedOnceOldEnough) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(3);
+  PipelineOptions options = defaultOptions(laser);
+  options.prune_min_observations = 15;
+  options.prune_age_steps = 10;
+  EXPECT_EQ(options.validate(), "");
+  SlamPipeline pipeline(options);
+  for (int i = 0; i <= 40; ++i) {
+    const Pose2 truth(0.05 * i, 0.0, 0.0);
+    pipeline.processScan(scanAt(world, compose(truth, laser), 0.1 * i, &rng), truth);
+  }
+  EXPECT_GT(pipeline.counters().pruned_rare, 0);
+  for (const LandmarkInfo& info : pipeline.filter().landmarks()) {
+    const bool young = pipeline.filter().step() - info.created_step < options.prune_age_steps;
+    EXPECT_TRUE(young || info.observations >= options.prune_min_observations)
+        << "landmark " << info.id << " seen " << info.observations << " times";
+  }
+  options.prune_age_steps = 0;
+  EXPECT_NE(options.validate().find("prune_age_steps"), std::string::npos);
+}
+
 TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {
   const sim::PolygonWorld world = cartonRoom();
   const Pose2 laser(0.1, 0.0, 0.0);
@@ -131,7 +182,7 @@ struct DriveResult {
   int landmarks = 0;
 };
 
-DriveResult driveLoop(unsigned seed) {
+DriveResult driveLoop(unsigned seed, bool scan_matching) {
   const sim::PolygonWorld world = cartonRoom();
   sim::LandmarkSimOptions drive;
   drive.landmarks = {Vector2(1000, 1000)};  // only the motion of this simulator is used
@@ -145,8 +196,8 @@ DriveResult driveLoop(unsigned seed) {
   drive.odometry_noise.rot_per_rot = 0.02;
   sim::LandmarkSimulator sim(drive);
   const Pose2 laser = drive.laser_pose;
-  PipelineOptions options = defaultOptions(laser);
-  options.filter.motion_noise = drive.odometry_noise;
+  PipelineOptions options = defaultOptions(laser, scan_matching);
+  options.filter.motion_noise = drive.odometry_noise;  // used when scan matching is off
   // The map frame is the robot's start: give the pipeline poses relative to it.
   const Pose2 start = sim.current().true_pose;
   std::mt19937 rng(seed + 100);
@@ -185,18 +236,20 @@ TEST(SlamPipeline, RaycastDriveBeatsOdometry) {
   // millimetre level throughout and the smoother has nothing to correct (the
   // smoother's benefit is tested where drift builds up before a loop
   // closure); both are printed and both must stay accurate.
-  for (unsigned seed : {1u, 2u, 3u}) {
-    const DriveResult r = driveLoop(seed);
-    std::cout << "seed " << seed << ": final error " << r.final_error << " m, "
-              << radToDeg(r.final_heading_error) << " deg (odometry " << r.odometry_final_error
-              << " m); mean error filtered " << r.mean_filtered_error << " m, smoothed "
-              << r.mean_smoothed_error << " m; " << r.landmarks << " landmarks\n";
-    EXPECT_LT(r.final_error, 0.10);
-    EXPECT_LT(radToDeg(r.final_heading_error), 2.0);
-    EXPECT_GT(r.odometry_final_error, 3 * r.final_error);
-    EXPECT_LT(r.mean_filtered_error, 0.03);
-    EXPECT_LT(r.mean_smoothed_error, 0.03);
-  }
+  for (const bool scan_matching : {false, true})
+    for (unsigned seed : {1u, 2u, 3u}) {
+      const DriveResult r = driveLoop(seed, scan_matching);
+      std::cout << (scan_matching ? "scan-matched control, " : "odometry control, ") << "seed "
+                << seed << ": final error " << r.final_error << " m, "
+                << radToDeg(r.final_heading_error) << " deg (odometry " << r.odometry_final_error
+                << " m); mean error filtered " << r.mean_filtered_error << " m, smoothed "
+                << r.mean_smoothed_error << " m; " << r.landmarks << " landmarks\n";
+      EXPECT_LT(r.final_error, 0.10);
+      EXPECT_LT(radToDeg(r.final_heading_error), 2.0);
+      EXPECT_GT(r.odometry_final_error, 3 * r.final_error);
+      EXPECT_LT(r.mean_filtered_error, 0.03);
+      EXPECT_LT(r.mean_smoothed_error, 0.03);
+    }
 }
 
 }  // namespace

@@ -151,6 +151,10 @@ int main(int argc, char** argv) {
     }
   }
 
+  // Whatever happens below, a report from an earlier run must not make this
+  // directory look complete: report.txt is removed first and written last.
+  ::unlink((out_dir + "/report.txt").c_str());
+
   const auto wall_start = std::chrono::steady_clock::now();
   ekf_slam::LogData log;
   const std::string input_error = bag_path.empty()
@@ -178,7 +182,6 @@ int main(int argc, char** argv) {
     std::cerr << "ekf_slam_offline: cannot create " << out_dir << "\n";
     return 3;
   }
-  ::unlink((out_dir + "/report.txt").c_str());  // a stale report would claim completeness
 
   ekf_slam::SlamPipeline pipeline(config.pipeline);
   const bool tty = ::isatty(STDERR_FILENO);
@@ -205,6 +208,12 @@ int main(int argc, char** argv) {
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_smoothed.txt", smoothed);
   if (error.empty())
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_odometry.txt", odometry);
+  if (error.empty() && config.pipeline.scan_matching.enabled) {
+    // The control source alone (scan-matched odometry, before the filter).
+    std::vector<ekf_slam::StampedPose> matched;
+    for (const ekf_slam::ScanRecord& r : pipeline.scans()) matched.push_back({r.stamp, r.odometry});
+    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_scan_matched.txt", matched);
+  }
   if (error.empty()) error = writeLandmarks(out_dir + "/landmarks.yaml", pipeline.filter());
   if (error.empty()) {
     error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, smoothed,
@@ -222,6 +231,9 @@ int main(int argc, char** argv) {
     std::cerr << "ekf_slam_offline: " << error << "\n";
     return 3;
   }
+  // Everything but the figures (drawn by a Python script in a child process).
+  const double processing =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (figures) {
     const std::string script = std::string(EKF_SLAM_SOURCE_DIR) + "/tools/plot_offline.py";
     const std::string command = "/usr/bin/python3 '" + script + "' '" + out_dir + "'";
@@ -253,16 +265,27 @@ int main(int argc, char** argv) {
          << ", skipped (time not increasing): " << c.time_not_increasing
          << ", odometry jumps: " << c.odometry_jumps << ", bad input: " << c.bad_input
          << ", update failures: " << c.update_failures << "\n"
+         << "scan matching: "
+         << (config.pipeline.scan_matching.enabled
+                 ? std::to_string(c.scan_matches) + " scans matched, " +
+                       std::to_string(c.scan_match_refusals) +
+                       " fell back to the odometry increment"
+                 : std::string("off (raw odometry is the control)"))
+         << "\n"
          << "observations (landmark candidates): " << c.observations << " ("
          << (c.iterations ? static_cast<double>(c.observations) / c.iterations : 0.0)
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous
          << ", new: " << c.new_landmarks << "\n"
          << "landmarks: " << pipeline.filter().landmarkCount() << " (" << c.new_landmarks
-         << " created, " << c.pruned << " pruned as seen once)"
+         << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
+         << " as seen rarely)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
-         << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n";
+         << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
+         << "processing: " << processing
+         << " s (reading, scan matching, SLAM, smoothing, trajectories and maps; the figures "
+            "excluded)\n";
   std::ofstream(out_dir + "/report.txt") << report.str();
   std::cout << report.str();
   return 0;

@@ -32,6 +32,19 @@ void bindFeatures(YamlBinder b, FeatureOptions* f) {
   b.rejectUnknownKeys();
 }
 
+void bindMotionNoise(YamlBinder noise, MotionNoiseOptions* n) {
+  noise.number("rot_per_rot", &n->rot_per_rot, 0.0, kHuge);
+  noise.number("rot_per_trans", &n->rot_per_trans, 0.0, kHuge);
+  noise.number("trans_per_trans", &n->trans_per_trans, 0.0, kHuge);
+  noise.number("trans_per_rot", &n->trans_per_rot, 0.0, kHuge);
+  noise.number("min_rot_sigma", &n->min_rot_sigma, 0.0, kHuge);
+  noise.number("min_trans_sigma", &n->min_trans_sigma, 0.0, kHuge);
+  noise.number("rot_per_metre", &n->rot_per_metre, 0.0, kHuge);
+  noise.number("trans_per_metre", &n->trans_per_metre, 0.0, kHuge);
+  noise.number("rot_per_radian", &n->rot_per_radian, 0.0, kHuge);
+  noise.rejectUnknownKeys();
+}
+
 void bindFilter(YamlBinder b, FilterOptions* f, bool* laser_pose_given) {
   std::vector<double> laser;
   b.numbers("laser_pose", &laser, 3);
@@ -42,18 +55,34 @@ void bindFilter(YamlBinder b, FilterOptions* f, bool* laser_pose_given) {
   b.number("max_step_translation", &f->max_step_translation, 1e-6, kHuge);
   b.number("max_step_rotation", &f->max_step_rotation, 1e-6, 2 * kPi);
   b.integer("tentative_max_age", &f->tentative_max_age, 0L, 1000000L);
-  YamlBinder noise = b.child("motion_noise");
-  MotionNoiseOptions& n = f->motion_noise;
-  noise.number("rot_per_rot", &n.rot_per_rot, 0.0, kHuge);
-  noise.number("rot_per_trans", &n.rot_per_trans, 0.0, kHuge);
-  noise.number("trans_per_trans", &n.trans_per_trans, 0.0, kHuge);
-  noise.number("trans_per_rot", &n.trans_per_rot, 0.0, kHuge);
-  noise.number("min_rot_sigma", &n.min_rot_sigma, 0.0, kHuge);
-  noise.number("min_trans_sigma", &n.min_trans_sigma, 0.0, kHuge);
-  noise.number("rot_per_metre", &n.rot_per_metre, 0.0, kHuge);
-  noise.number("trans_per_metre", &n.trans_per_metre, 0.0, kHuge);
-  noise.number("rot_per_radian", &n.rot_per_radian, 0.0, kHuge);
-  noise.rejectUnknownKeys();
+  bindMotionNoise(b.child("motion_noise"), &f->motion_noise);
+  b.rejectUnknownKeys();
+}
+
+void bindScanMatching(YamlBinder b, PipelineOptions* p) {
+  ScanMatcherOptions& s = p->scan_matching;
+  b.boolean("enabled", &s.enabled);
+  b.number("initial_correspondence_distance", &s.initial_correspondence_distance, 1e-4, 100.0);
+  b.number("correspondence_distance", &s.correspondence_distance, 1e-4, 100.0);
+  b.number("huber_delta", &s.huber_delta, 1e-6, 100.0);
+  b.number("point_sigma", &s.point_sigma, 1e-6, 100.0);
+  b.number("prior_sigma_translation", &s.prior_sigma_translation, 1e-6, kHuge);
+  b.number("prior_sigma_rotation", &s.prior_sigma_rotation, 1e-6, kHuge);
+  b.integer("max_iterations", &s.max_iterations, 1, 10000);
+  b.number("convergence_step", &s.convergence_step, 1e-12, 1.0);
+  b.number("min_point_spacing", &s.min_point_spacing, 0.0, 10.0);
+  b.number("max_range", &s.max_range, 1e-3, kHuge);
+  b.number("normal_radius", &s.normal_radius, 1e-3, 10.0);
+  b.integer("min_correspondences", &s.min_correspondences, 3, 100000);
+  b.number("min_inlier_fraction", &s.min_inlier_fraction, 0.0, 1.0);
+  b.number("max_correction_translation", &s.max_correction_translation, 1e-6, kHuge);
+  b.number("max_correction_rotation", &s.max_correction_rotation, 1e-6, 2 * kPi);
+  b.text("map_mode", &s.map_mode, {"local", "global"});
+  b.number("map_point_spacing", &s.map_point_spacing, 0.0, 10.0);
+  b.integer("local_map_scans", &s.local_map_scans, 1, 10000);
+  b.number("keyscan_distance", &s.keyscan_distance, 0.0, kHuge);
+  b.number("keyscan_angle", &s.keyscan_angle, 0.0, 2 * kPi);
+  bindMotionNoise(b.child("motion_noise"), &p->scan_matched_motion_noise);
   b.rejectUnknownKeys();
 }
 
@@ -74,6 +103,8 @@ void bindPipeline(YamlBinder b, PipelineOptions* p) {
   b.number("min_travel_distance", &p->min_travel_distance, 0.0, kHuge);
   b.number("min_travel_angle", &p->min_travel_angle, 0.0, 2 * kPi);
   b.number("max_landmark_range", &p->max_landmark_range, 1e-3, kHuge);
+  b.integer("prune_min_observations", &p->prune_min_observations, 0, 1000000);
+  b.integer("prune_age_steps", &p->prune_age_steps, 1L, 100000000L);
   std::vector<double> sigma;
   b.numbers("initial_pose_sigma", &sigma, 3);
   if (!sigma.empty()) {
@@ -113,6 +144,7 @@ std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
   bindFilter(top.child("filter"), &c.pipeline.filter, &c.laser_pose_given);
   bindAssociation(top.child("association"), &c.pipeline.association);
   bindPipeline(top.child("pipeline"), &c.pipeline);
+  bindScanMatching(top.child("scan_matching"), &c.pipeline);
   bindMap(top.child("map"), &c.map);
   bindInput(top.child("input"), &c.input);
   top.rejectUnknownKeys();

@@ -1,0 +1,335 @@
+#include "ekf_slam_core/scan_matching/scan_matcher.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace ekf_slam {
+
+std::string ScanMatcherOptions::validate() const {
+  if (!(correspondence_distance > 0.0)) return "correspondence_distance must be > 0 (m)";
+  if (!(initial_correspondence_distance >= correspondence_distance)) {
+    return "initial_correspondence_distance must be >= correspondence_distance (m)";
+  }
+  if (!(huber_delta > 0.0)) return "huber_delta must be > 0 (m)";
+  if (!(point_sigma > 0.0)) return "point_sigma must be > 0 (m)";
+  if (!(prior_sigma_translation > 0.0)) return "prior_sigma_translation must be > 0 (m)";
+  if (!(prior_sigma_rotation > 0.0)) return "prior_sigma_rotation must be > 0 (rad)";
+  if (max_iterations < 1) return "max_iterations must be >= 1";
+  if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
+  if (!(min_point_spacing >= 0.0)) return "min_point_spacing must be >= 0 (m)";
+  if (!(max_range > 0.0)) return "max_range must be > 0 (m)";
+  if (!(normal_radius > 0.0)) return "normal_radius must be > 0 (m)";
+  if (min_correspondences < 3) return "min_correspondences must be >= 3";
+  if (!(min_inlier_fraction >= 0.0 && min_inlier_fraction <= 1.0)) {
+    return "min_inlier_fraction must be in [0, 1]";
+  }
+  if (!(max_correction_translation > 0.0)) return "max_correction_translation must be > 0 (m)";
+  if (!(max_correction_rotation > 0.0)) return "max_correction_rotation must be > 0 (rad)";
+  if (map_mode != "local" && map_mode != "global") {
+    return "map_mode must be local or global, got " + map_mode;
+  }
+  if (!(map_point_spacing >= 0.0)) return "map_point_spacing must be >= 0 (m)";
+  if (local_map_scans < 1) return "local_map_scans must be >= 1";
+  if (!(keyscan_distance >= 0.0)) return "keyscan_distance must be >= 0 (m)";
+  if (!(keyscan_angle >= 0.0)) return "keyscan_angle must be >= 0 (rad)";
+  return "";
+}
+
+// ---------------------------------------------------------------------------
+// Reference point set
+
+PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, double normal_radius,
+                                         double cell_size)
+    : cell_size_(cell_size) {
+  // A first grid over all points to find neighbours for the normals.
+  points_ = points;
+  buildGrid();
+  const double radius2 = normal_radius * normal_radius;
+  std::vector<Vector2> kept_points, kept_normals;
+  kept_points.reserve(points.size());
+  kept_normals.reserve(points.size());
+  const int reach = static_cast<int>(std::ceil(normal_radius / cell_size_));
+  for (const Vector2& p : points) {
+    int cx, cy;
+    cellOf(p, &cx, &cy);
+    Vector2 sum = Vector2::Zero();
+    Matrix2 sum_sq = Matrix2::Zero();
+    int n = 0;
+    for (int ix = cx - reach; ix <= cx + reach; ++ix) {
+      for (int iy = cy - reach; iy <= cy + reach; ++iy) {
+        const auto it = grid_.find(key(ix, iy));
+        if (it == grid_.end()) continue;
+        for (int j : it->second) {
+          const Vector2& q = points_[j];
+          if ((q - p).squaredNorm() > radius2) continue;
+          sum += q;
+          sum_sq += q * q.transpose();
+          ++n;
+        }
+      }
+    }
+    // Three points (the point and two neighbours) are the fewest that say
+    // whether they lie on a line.
+    if (n < 3) continue;
+    const Vector2 mean = sum / n;
+    const Matrix2 covariance = sum_sq / n - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance);
+    // A blob with no dominant direction (both spreads alike) has no tangent line.
+    if (eigen.eigenvalues()(0) > 0.25 * eigen.eigenvalues()(1)) continue;
+    kept_points.push_back(p);
+    kept_normals.push_back(eigen.eigenvectors().col(0).normalized());
+  }
+  points_ = std::move(kept_points);
+  normals_ = std::move(kept_normals);
+  buildGrid();
+}
+
+PointCloudReference::CellKey PointCloudReference::key(int ix, int iy) const {
+  return (static_cast<CellKey>(ix) << 32) ^ static_cast<CellKey>(static_cast<uint32_t>(iy));
+}
+
+void PointCloudReference::cellOf(const Vector2& p, int* ix, int* iy) const {
+  *ix = static_cast<int>(std::floor(p.x() / cell_size_));
+  *iy = static_cast<int>(std::floor(p.y() / cell_size_));
+}
+
+void PointCloudReference::addToGrid(int index) {
+  int ix, iy;
+  cellOf(points_[index], &ix, &iy);
+  grid_[key(ix, iy)].push_back(index);
+}
+
+void PointCloudReference::buildGrid() {
+  grid_.clear();
+  for (int i = 0; i < static_cast<int>(points_.size()); ++i) addToGrid(i);
+}
+
+void PointCloudReference::insert(const std::vector<Vector2>& points,
+                                 const std::vector<Vector2>& normals, double min_spacing) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (min_spacing > 0.0 && nearest(points[i], min_spacing) >= 0) continue;
+    points_.push_back(points[i]);
+    normals_.push_back(normals[i]);
+    addToGrid(static_cast<int>(points_.size()) - 1);
+  }
+}
+
+int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
+  int cx, cy;
+  cellOf(p, &cx, &cy);
+  const int reach = static_cast<int>(std::ceil(max_distance / cell_size_));
+  int best = -1;
+  double best_d2 = max_distance * max_distance;
+  for (int ix = cx - reach; ix <= cx + reach; ++ix) {
+    for (int iy = cy - reach; iy <= cy + reach; ++iy) {
+      const auto it = grid_.find(key(ix, iy));
+      if (it == grid_.end()) continue;
+      for (int j : it->second) {
+        const double d2 = (points_[j] - p).squaredNorm();
+        if (d2 <= best_d2) {
+          best_d2 = d2;
+          best = j;
+        }
+      }
+    }
+  }
+  return best;
+}
+
+// ---------------------------------------------------------------------------
+// ICP
+
+MatchResult matchPoints(const std::vector<Vector2>& points, const PointCloudReference& reference,
+                        const Pose2& guess, const ScanMatcherOptions& options) {
+  MatchResult result;
+  result.pose = guess;
+  if (static_cast<int>(points.size()) < options.min_correspondences ||
+      static_cast<int>(reference.size()) < options.min_correspondences) {
+    result.message = "too few points to match";
+    return result;
+  }
+  Vector3 x = guess.vector();
+  const Vector3 prior_information(
+      1.0 / (options.prior_sigma_translation * options.prior_sigma_translation),
+      1.0 / (options.prior_sigma_translation * options.prior_sigma_translation),
+      1.0 / (options.prior_sigma_rotation * options.prior_sigma_rotation));
+  // The gate shrinks linearly over the first kShrinkSteps iterations.
+  constexpr int kShrinkSteps = 5;
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    const double shrink = std::max(0.0, 1.0 - static_cast<double>(iteration) / kShrinkSteps);
+    const double gate =
+        options.correspondence_distance +
+        shrink * (options.initial_correspondence_distance - options.correspondence_distance);
+    const double c = std::cos(x.z()), s = std::sin(x.z());
+    Matrix3 H = Matrix3::Zero();
+    Vector3 b = Vector3::Zero();
+    int pairs = 0;
+    double sum_r2 = 0.0;
+    for (const Vector2& p : points) {
+      const Vector2 rotated(c * p.x() - s * p.y(), s * p.x() + c * p.y());
+      const Vector2 q = rotated + x.head<2>();
+      const int j = reference.nearest(q, gate);
+      if (j < 0) continue;
+      const Vector2& n = reference.normals()[j];
+      const double r = n.dot(q - reference.points()[j]);
+      // ∂q/∂θ = (−rotated.y, rotated.x)
+      const Vector3 J(n.x(), n.y(), n.x() * -rotated.y() + n.y() * rotated.x());
+      const double w = std::abs(r) <= options.huber_delta ? 1.0 : options.huber_delta / std::abs(r);
+      H += w * J * J.transpose();
+      b += w * J * r;
+      ++pairs;
+      sum_r2 += r * r;
+    }
+    result.iterations = iteration + 1;
+    result.correspondences = pairs;
+    result.rms_residual = pairs ? std::sqrt(sum_r2 / pairs) : 0.0;
+    if (pairs < options.min_correspondences) break;
+    // The prior on the odometry guess keeps a direction the scan does not
+    // constrain (motion along a corridor) where the odometry puts it.
+    Vector3 offset = x - guess.vector();
+    offset.z() = wrapAngle(offset.z());
+    const double point_information = 1.0 / (options.point_sigma * options.point_sigma);
+    const Matrix3 H_total = point_information * H + prior_information.asDiagonal().toDenseMatrix();
+    const Vector3 b_total = point_information * b + prior_information.cwiseProduct(offset);
+    const Vector3 step = H_total.ldlt().solve(-b_total);
+    if (!step.allFinite()) break;
+    x += step;
+    x.z() = wrapAngle(x.z());
+    if (shrink == 0.0 && step.head<2>().norm() < options.convergence_step &&
+        std::abs(step.z()) < options.convergence_step) {
+      break;
+    }
+  }
+  result.pose = Pose2::fromVector(x);
+  result.inlier_fraction = static_cast<double>(result.correspondences) / points.size();
+  if (result.correspondences < options.min_correspondences) {
+    std::ostringstream m;
+    m << result.correspondences << " point pairs, fewer than min_correspondences "
+      << options.min_correspondences;
+    result.message = m.str();
+    return result;
+  }
+  if (result.inlier_fraction < options.min_inlier_fraction) {
+    std::ostringstream m;
+    m << "inlier fraction " << result.inlier_fraction << " below min_inlier_fraction "
+      << options.min_inlier_fraction;
+    result.message = m.str();
+    return result;
+  }
+  result.ok = true;
+  return result;
+}
+
+std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser_pose,
+                                            const ScanMatcherOptions& options) {
+  std::vector<Vector2> out;
+  out.reserve(scan.ranges.size());
+  const double spacing2 = options.min_point_spacing * options.min_point_spacing;
+  for (int i = 0; i < scan.size(); ++i) {
+    if (!scan.isValid(i) || scan.ranges[i] > options.max_range) continue;
+    const double a = scan.angle(i);
+    const Vector2 p = transformFrom(
+        laser_pose, Vector2(scan.ranges[i] * std::cos(a), scan.ranges[i] * std::sin(a)));
+    if (!out.empty() && (p - out.back()).squaredNorm() < spacing2) continue;
+    out.push_back(p);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Scan-matched odometry
+
+void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const Pose2& pose) {
+  std::vector<Vector2> placed;
+  placed.reserve(points.size());
+  for (const Vector2& p : points) placed.push_back(transformFrom(pose, p));
+  ++counters_.key_scans;
+  last_key_pose_ = pose;
+  if (globalMap()) {
+    // Normals from the key scan's own points, then merged into the map.
+    const PointCloudReference scan(placed, options_.normal_radius,
+                                   options_.initial_correspondence_distance);
+    if (!reference_) {
+      reference_ = std::make_unique<PointCloudReference>(
+          std::vector<Vector2>(), options_.normal_radius, options_.initial_correspondence_distance);
+    }
+    reference_->insert(scan.points(), scan.normals(), options_.map_point_spacing);
+    return;
+  }
+  key_scans_.push_back(std::move(placed));
+  if (static_cast<int>(key_scans_.size()) > options_.local_map_scans) {
+    key_scans_.erase(key_scans_.begin());
+  }
+  reference_points_.clear();
+  for (const auto& scan : key_scans_) {
+    reference_points_.insert(reference_points_.end(), scan.begin(), scan.end());
+  }
+  reference_ = std::make_unique<PointCloudReference>(reference_points_, options_.normal_radius,
+                                                     options_.initial_correspondence_distance);
+  last_key_pose_ = pose;
+}
+
+Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
+                                    const Pose2& laser_pose, MatchResult* result) {
+  const std::vector<Vector2> points = scanPointsInRobotFrame(scan, laser_pose, options_);
+  MatchResult local;
+  MatchResult& match = result ? *result : local;
+  match = MatchResult();
+  if (!initialised_) {
+    // The corrected frame starts where the odometry frame is, so the output
+    // is a drop-in replacement for the odometry pose.
+    initialised_ = true;
+    last_raw_ = raw_odometry;
+    last_corrected_ = raw_odometry;
+    addKeyScan(points, raw_odometry);
+    match.ok = true;
+    match.pose = raw_odometry;
+    match.message = "first scan";
+    return raw_odometry;
+  }
+
+  const Pose2 guess = compose(last_corrected_, between(last_raw_, raw_odometry));
+  Pose2 corrected = guess;
+  match = matchPoints(points, *reference_, guess, options_);
+  if (match.ok) {
+    const Pose2 correction = between(guess, match.pose);
+    if (std::hypot(correction.x, correction.y) > options_.max_correction_translation ||
+        std::abs(correction.theta) > options_.max_correction_rotation) {
+      std::ostringstream m;
+      m << "correction of the odometry guess (" << correction.x << " m, " << correction.y << " m, "
+        << radToDeg(correction.theta) << " deg) beyond max_correction_*";
+      match.ok = false;
+      match.message = m.str();
+    } else {
+      corrected = match.pose;
+    }
+  }
+  if (match.ok) {
+    ++counters_.matched;
+    consecutive_refusals_ = 0;
+  } else {
+    ++counters_.refused;
+    ++consecutive_refusals_;
+  }
+  last_raw_ = raw_odometry;
+  last_corrected_ = corrected;
+
+  const Pose2 since_key = between(last_key_pose_, corrected);
+  if (std::hypot(since_key.x, since_key.y) >= options_.keyscan_distance ||
+      std::abs(since_key.theta) >= options_.keyscan_angle) {
+    // Local map: a refused match still joins the reference when the robot
+    // has moved, otherwise a long stretch of refusals would leave a stale
+    // reference. Global map: a scan placed by dead reckoning only would stay
+    // in the map for good, so only matched scans join it, unless the matches
+    // keep failing (the robot entered space the map does not cover).
+    constexpr int kRefusalsBeforeMapping = 3;
+    if (match.ok || !globalMap() || consecutive_refusals_ >= kRefusalsBeforeMapping) {
+      addKeyScan(points, corrected);
+    }
+  }
+  return corrected;
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,163 @@
+// Laser scan matching: the pose of a scan against a reference point set, by
+// point-to-line ICP (Censi 2008's metric, Gauss-Newton on the SE(2) pose)
+// with a robust (Huber) kernel. The odometry gives the initial guess; the
+// matcher refines it. Wheel odometry on the Freiburg logs drifts by degrees
+// per metre, while consecutive LMS200 scans of walls pin the relative pose
+// down to millimetres, so this increment is a much better control for the
+// filter than the odometry increment (docs/offline.md, measured).
+//
+// Maths, in the code's symbols: a scan point p (base_link frame) is placed
+// in the reference frame by the pose T = (x, y, θ): q(T) = R(θ) p + t. Its
+// correspondence is the nearest reference point m within a gate, with unit
+// normal n (from the principal axes of m's neighbours). The residual is the
+// distance to the tangent line through m,
+//   r = nᵀ (R(θ) p + t − m),
+//   ∂r/∂(x, y, θ) = [n_x, n_y, nᵀ R'(θ) p],  R'(θ) p = (−p_y', p_x') rotated.
+// The odometry guess g enters as a prior with information Λ =
+// diag(σ_t⁻², σ_t⁻², σ_θ⁻²), so that a direction the scan does not constrain
+// (along a featureless corridor) stays at the guess instead of following the
+// noise. Each Gauss-Newton step solves
+//   (Σ w Jᵀ J / σ_p² + Λ) δ = −(Σ w J r / σ_p² + Λ (x − g))
+// with Huber weights w = min(1, huber_delta / |r|). The correspondence gate shrinks from
+// initial_correspondence_distance to correspondence_distance over the first
+// iterations, so a guess off by a few decimetres still converges while the
+// final estimate uses only close pairs.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/sensors/scan.h"
+
+namespace ekf_slam {
+
+struct ScanMatcherOptions {
+  bool enabled = true;                           // false: the raw odometry is the control (thesis)
+  double initial_correspondence_distance = 0.5;  // m: pairing gate at the first iteration
+  double correspondence_distance = 0.15;         // m: pairing gate once the estimate has settled
+  double huber_delta = 0.03;                     // m: residuals beyond count linearly (robust)
+  double point_sigma = 0.02;  // m: 1-sigma point-to-line residual (range noise + wall roughness)
+  double prior_sigma_translation = 0.1;     // m: 1-sigma of the odometry guess, per axis
+  double prior_sigma_rotation = 0.05;       // rad: 1-sigma of the odometry guess's heading
+  int max_iterations = 30;                  // Gauss-Newton steps per match
+  double convergence_step = 1e-5;           // m or rad: a smaller step ends the iterations
+  double min_point_spacing = 0.05;          // m: scan points closer than this are thinned
+  double max_range = 30.0;                  // m: farther readings are not matched
+  double normal_radius = 0.25;              // m: neighbours used to fit a reference normal
+  int min_correspondences = 40;             // fewer paired points: the match is refused
+  double min_inlier_fraction = 0.4;         // of the scan's points within the final gate
+  double max_correction_translation = 0.5;  // m: a larger change of the odometry guess is refused
+  double max_correction_rotation = 0.35;    // rad: likewise for the heading (20 deg)
+  // Reference the scans are matched against: "local" = the last
+  // local_map_scans key scans (pure scan-matching odometry, drifts slowly);
+  // "global" = every key scan ever accepted, merged into one point map
+  // (points closer than map_point_spacing to a map point are not added), so
+  // a revisited place is matched against what was seen there before and the
+  // drift is pulled back (scan-to-map matching, as Hector SLAM does).
+  std::string map_mode = "global";
+  double map_point_spacing = 0.05;  // m: global map resolution
+  int local_map_scans = 8;          // key scans kept as the reference (local mode)
+  double keyscan_distance = 0.15;   // m of travel before the scan joins the reference …
+  double keyscan_angle = 0.1;       // rad … or this much turn
+
+  std::string validate() const;  // empty when valid, else names the bad field
+};
+
+// A reference point set with normals and a hash grid for nearest neighbours.
+class PointCloudReference {
+ public:
+  // Points in one frame; normals are fitted from neighbours within `normal_radius`;
+  // points with too few neighbours or no dominant direction are dropped.
+  PointCloudReference(const std::vector<Vector2>& points, double normal_radius, double cell_size);
+
+  // Adds points with their normals; a point within `min_spacing` of an
+  // existing point is not added (the map does not grow on revisits).
+  void insert(const std::vector<Vector2>& points, const std::vector<Vector2>& normals,
+              double min_spacing);
+
+  // Index of the nearest point within `max_distance` of p, or -1.
+  int nearest(const Vector2& p, double max_distance) const;
+  const std::vector<Vector2>& points() const { return points_; }
+  const std::vector<Vector2>& normals() const { return normals_; }
+  size_t size() const { return points_.size(); }
+
+ private:
+  using CellKey = long long;
+  CellKey key(int ix, int iy) const;
+  void cellOf(const Vector2& p, int* ix, int* iy) const;
+  void buildGrid();
+  void addToGrid(int index);
+
+  std::vector<Vector2> points_;
+  std::vector<Vector2> normals_;
+  double cell_size_;
+  std::unordered_map<CellKey, std::vector<int>> grid_;
+};
+
+struct MatchResult {
+  bool ok = false;
+  Pose2 pose;               // refined pose of the scan points' frame in the reference frame
+  int correspondences = 0;  // pairs within the final gate
+  double inlier_fraction = 0.0;
+  double rms_residual = 0.0;  // m, over the final pairs
+  int iterations = 0;
+  std::string message;  // why the match was refused
+};
+
+// Aligns `points` (in their own frame) to `reference`, starting from `guess`.
+MatchResult matchPoints(const std::vector<Vector2>& points, const PointCloudReference& reference,
+                        const Pose2& guess, const ScanMatcherOptions& options);
+
+// Valid readings of a scan as points in the robot frame (through the laser
+// mount), thinned to min_point_spacing and limited to max_range.
+std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser_pose,
+                                            const ScanMatcherOptions& options);
+
+struct ScanMatcherCounters {
+  long matched = 0;
+  long refused = 0;  // fell back to the odometry increment
+  long key_scans = 0;
+};
+
+// The front end used by the pipeline: keeps a local map of the last key
+// scans in its own "scan-matched odometry" frame and turns every raw
+// odometry pose into a corrected one. A refused match (too few pairs, a
+// correction beyond the bounds) falls back to the odometry increment, so
+// the output is never worse than dead reckoning by more than one refusal.
+class ScanMatchingOdometry {
+ public:
+  explicit ScanMatchingOdometry(const ScanMatcherOptions& options) : options_(options) {}
+
+  // Corrected odom → base_link for this scan. `laser_pose` is base_link → laser.
+  Pose2 process(const Scan& scan, const Pose2& raw_odometry, const Pose2& laser_pose,
+                MatchResult* result = nullptr);
+
+  // The corrected pose of a scan that cannot be matched (bad geometry):
+  // the last corrected pose moved by the raw odometry increment. No state change.
+  Pose2 deadReckon(const Pose2& raw_odometry) const {
+    return initialised_ ? compose(last_corrected_, between(last_raw_, raw_odometry)) : raw_odometry;
+  }
+
+  const ScanMatcherCounters& counters() const { return counters_; }
+  size_t mapPoints() const { return reference_ ? reference_->size() : 0; }
+
+ private:
+  void addKeyScan(const std::vector<Vector2>& points, const Pose2& pose);
+  bool globalMap() const { return options_.map_mode == "global"; }
+
+  ScanMatcherOptions options_;
+  ScanMatcherCounters counters_;
+  bool initialised_ = false;
+  int consecutive_refusals_ = 0;
+  Pose2 last_raw_;
+  Pose2 last_corrected_;
+  Pose2 last_key_pose_;
+  std::vector<std::vector<Vector2>> key_scans_;  // points in the corrected frame
+  std::vector<Vector2> reference_points_;
+  std::unique_ptr<PointCloudReference> reference_;
+};
+
+}  // namespace ekf_slam

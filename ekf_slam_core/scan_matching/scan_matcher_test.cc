@@ -1,0 +1,230 @@
+// Scan matcher on synthetic scans of known motion: ray-cast sweeps of a
+// room with cartons (sim::PolygonWorld), LMS200-like noise, clutter.
+#include "ekf_slam_core/scan_matching/scan_matcher.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "ekf_slam_core/sim/polygon_world.h"
+
+namespace ekf_slam {
+namespace {
+
+// A 12 m × 8 m room with three cartons: enough structure in every direction.
+sim::PolygonWorld room() {
+  sim::PolygonWorld world;
+  world.addPolygon({{-6, -4}, {6, -4}, {6, 4}, {-6, 4}});
+  world.addBox({2.0, 1.5}, 0.6, 0.4, 0.3);
+  world.addBox({-2.5, -1.0}, 0.8, 0.8);
+  world.addBox({1.0, -2.5}, 1.0, 0.5, -0.4);
+  return world;
+}
+
+Scan sweep(const sim::RayCaster& world, const Pose2& robot, const Pose2& laser, std::mt19937* rng,
+           double sigma = 0.01) {
+  sim::SweepGeometry geometry;
+  geometry.angle_increment = kPi / 179;
+  geometry.count = 180;
+  geometry.max_range = 30.0;
+  Scan scan;
+  scan.ranges = sim::simulateRanges(world, compose(robot, laser), geometry, sigma, rng);
+  scan.angle_min = geometry.angle_min;
+  scan.angle_increment = geometry.angle_increment;
+  scan.range_min = 0.0;
+  scan.range_max = 30.0;
+  return scan;
+}
+
+PointCloudReference referenceOf(const Scan& scan, const Pose2& pose, const Pose2& laser,
+                                const ScanMatcherOptions& options) {
+  std::vector<Vector2> points;
+  for (const Vector2& p : scanPointsInRobotFrame(scan, laser, options)) {
+    points.push_back(transformFrom(pose, p));
+  }
+  return PointCloudReference(points, options.normal_radius,
+                             options.initial_correspondence_distance);
+}
+
+TEST(PointCloudReference, NormalsOfAStraightWallArePerpendicularToIt) {
+  std::vector<Vector2> wall;
+  for (int i = 0; i <= 40; ++i) wall.push_back(Vector2(-1.0 + 0.05 * i, 2.0));
+  const PointCloudReference reference(wall, 0.25, 0.5);
+  ASSERT_GT(reference.size(), 30u);
+  for (const Vector2& n : reference.normals()) {
+    EXPECT_NEAR(std::abs(n.y()), 1.0, 1e-9);
+    EXPECT_NEAR(n.x(), 0.0, 1e-6);
+  }
+  EXPECT_EQ(reference.nearest(Vector2(0.02, 2.1), 0.2) >= 0, true);
+  EXPECT_EQ(reference.nearest(Vector2(0.0, 3.0), 0.2), -1);  // beyond the gate
+}
+
+TEST(PointCloudReference, IsolatedPointsGetNoNormalAndAreDropped) {
+  const PointCloudReference reference({Vector2(0, 0), Vector2(5, 5), Vector2(-3, 2)}, 0.25, 0.5);
+  EXPECT_EQ(reference.size(), 0u);
+}
+
+TEST(MatchPoints, RecoversAKnownMotionFromAWrongGuess) {
+  std::mt19937 rng(7);
+  const sim::PolygonWorld world = room();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  const ScanMatcherOptions options;
+  const Pose2 first(0.0, 0.0, 0.1);
+  const Pose2 second(0.35, 0.12, 0.18);  // the true motion between the two scans
+  const PointCloudReference reference =
+      referenceOf(sweep(world, first, laser, &rng), first, laser, options);
+  const std::vector<Vector2> points =
+      scanPointsInRobotFrame(sweep(world, second, laser, &rng), laser, options);
+  // Odometry off by 12 cm and 4 degrees.
+  const Pose2 guess = compose(second, Pose2(0.08, -0.09, degToRad(4.0)));
+  const MatchResult result = matchPoints(points, reference, guess, options);
+  ASSERT_TRUE(result.ok) << result.message;
+  EXPECT_LT(std::hypot(result.pose.x - second.x, result.pose.y - second.y), 0.01);
+  EXPECT_LT(std::abs(wrapAngle(result.pose.theta - second.theta)), degToRad(0.2));
+  EXPECT_LT(result.rms_residual, 0.03);
+  EXPECT_GT(result.inlier_fraction, 0.8);
+}
+
+TEST(MatchPoints, ToleratesClutterThatIsNotInTheReference) {
+  std::mt19937 rng(11);
+  const sim::PolygonWorld world = room();
+  sim::PolygonWorld cluttered = room();
+  // People walking by: small objects seen only in the second scan.
+  cluttered.addBox({1.2, 0.6}, 0.3, 0.3);
+  cluttered.addBox({-1.0, 1.0}, 0.3, 0.3);
+  cluttered.addBox({0.5, -1.2}, 0.4, 0.3);
+  const Pose2 laser;
+  const ScanMatcherOptions options;
+  const Pose2 first(0.0, 0.0, 0.0), second(-0.2, 0.1, -0.1);
+  const PointCloudReference reference =
+      referenceOf(sweep(world, first, laser, &rng), first, laser, options);
+  const std::vector<Vector2> points =
+      scanPointsInRobotFrame(sweep(cluttered, second, laser, &rng), laser, options);
+  const MatchResult result =
+      matchPoints(points, reference, compose(second, Pose2(0.1, 0.05, 0.03)), options);
+  ASSERT_TRUE(result.ok) << result.message;
+  EXPECT_LT(std::hypot(result.pose.x - second.x, result.pose.y - second.y), 0.015);
+  EXPECT_LT(std::abs(wrapAngle(result.pose.theta - second.theta)), degToRad(0.3));
+}
+
+TEST(MatchPoints, ALongCorridorKeepsTheGuessAlongItsAxis) {
+  // Two parallel walls, no end in range: motion along the corridor is not
+  // observable, so the matcher must not invent one; across it, it corrects.
+  sim::PolygonWorld corridor;
+  corridor.addSegment({-100, 1.0}, {100, 1.0});
+  corridor.addSegment({-100, -1.2}, {100, -1.2});
+  std::mt19937 rng(3);
+  const Pose2 laser;
+  ScanMatcherOptions options;
+  const Pose2 first(0, 0, 0), second(0.3, 0.05, 0.02);
+  const PointCloudReference reference =
+      referenceOf(sweep(corridor, first, laser, &rng), first, laser, options);
+  const std::vector<Vector2> points =
+      scanPointsInRobotFrame(sweep(corridor, second, laser, &rng), laser, options);
+  const Pose2 guess(0.25, 0.0, 0.0);  // 5 cm short along x, 5 cm off across
+  const MatchResult result = matchPoints(points, reference, guess, options);
+  ASSERT_TRUE(result.ok) << result.message;
+  EXPECT_NEAR(result.pose.y, second.y, 0.01);
+  EXPECT_NEAR(result.pose.theta, second.theta, degToRad(0.3));
+  EXPECT_NEAR(result.pose.x, guess.x, 0.05);  // stays near the guess, no runaway
+}
+
+TEST(MatchPoints, RefusesWhenTooFewPointsPair) {
+  std::mt19937 rng(5);
+  const sim::PolygonWorld world = room();
+  const ScanMatcherOptions options;
+  const PointCloudReference reference =
+      referenceOf(sweep(world, Pose2(), Pose2(), &rng), Pose2(), Pose2(), options);
+  const std::vector<Vector2> few = {Vector2(1, 0), Vector2(2, 0)};
+  const MatchResult result = matchPoints(few, reference, Pose2(), options);
+  EXPECT_FALSE(result.ok);
+  EXPECT_FALSE(result.message.empty());
+}
+
+// A drive around the cartons with odometry that under-reads distance by 5 %
+// and drifts 2 deg per metre to the left: the scan-matched track stays within
+// centimetres of the truth while the odometry ends decimetres away.
+class BothMapModes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(BothMapModes, CorrectsBiasedOdometryAlongADrive) {
+  std::mt19937 rng(21);
+  const sim::PolygonWorld world = room();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  ScanMatcherOptions options;
+  options.map_mode = GetParam();
+  ScanMatchingOdometry matcher(options);
+  Pose2 truth(-4.5, -2.8, 0.0), odometry = truth;
+  double worst_matched = 0.0, final_odometry_error = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const Scan scan = sweep(world, truth, laser, &rng);
+    const Pose2 corrected = matcher.process(scan, odometry, laser);
+    // The corrected frame starts at the first odometry pose (= the truth here).
+    worst_matched =
+        std::max(worst_matched, std::hypot(corrected.x - truth.x, corrected.y - truth.y));
+    final_odometry_error = std::hypot(odometry.x - truth.x, odometry.y - truth.y);
+    // Next motion: 3 m legs of 5 cm steps, then a quarter turn on the spot.
+    const double turn = (k % 75 > 60) ? kPi / 2 / 14 : 0.0;
+    const Pose2 step(turn > 0.0 ? 0.0 : 0.05, 0.0, turn);
+    truth = compose(truth, step);
+    const Pose2 measured(step.x * 0.95, 0.0, step.theta + degToRad(2.0) * step.x);
+    odometry = compose(odometry, measured);
+  }
+  EXPECT_EQ(matcher.counters().refused, 0);
+  EXPECT_GT(final_odometry_error, 0.3);
+  EXPECT_LT(worst_matched, 0.08);
+}
+
+INSTANTIATE_TEST_SUITE_P(ScanMatchingOdometry, BothMapModes, ::testing::Values("local", "global"));
+
+// In the global map a place seen before is matched against the first visit:
+// after four laps the pose error is no larger than after the first.
+TEST(ScanMatchingOdometry, GlobalMapDoesNotGrowOnRevisits) {
+  std::mt19937 rng(4);
+  const sim::PolygonWorld world = room();
+  ScanMatchingOdometry matcher{ScanMatcherOptions()};
+  Pose2 truth(-4.0, 0.0, 0.0);
+  size_t after_first_lap = 0;
+  for (int k = 0; k < 4 * 72; ++k) {
+    matcher.process(sweep(world, truth, Pose2(), &rng), truth, Pose2());
+    if (k == 71) after_first_lap = matcher.mapPoints();
+    truth = compose(truth, Pose2(0.0, 0.0, 2.0 * kPi / 72));  // turning on the spot
+  }
+  EXPECT_GT(after_first_lap, 300u);
+  // Noise adds a few points where a new reading falls just beyond the spacing.
+  EXPECT_LT(matcher.mapPoints(), after_first_lap * 13 / 10);
+}
+
+TEST(ScanMatchingOdometry, AnEmptyScanFallsBackToTheOdometryIncrement) {
+  std::mt19937 rng(2);
+  const sim::PolygonWorld world = room();
+  ScanMatchingOdometry matcher{ScanMatcherOptions()};
+  matcher.process(sweep(world, Pose2(), Pose2(), &rng), Pose2(), Pose2());
+  Scan empty = sweep(world, Pose2(), Pose2(), &rng);
+  for (double& r : empty.ranges) r = 81.83;  // "no return" everywhere
+  const Pose2 odometry(0.2, 0.0, 0.05);
+  MatchResult result;
+  const Pose2 corrected = matcher.process(empty, odometry, Pose2(), &result);
+  EXPECT_FALSE(result.ok);
+  EXPECT_EQ(matcher.counters().refused, 1);
+  EXPECT_NEAR(corrected.x, 0.2, 1e-12);
+  EXPECT_NEAR(corrected.theta, 0.05, 1e-12);
+}
+
+TEST(ScanMatcherOptions, ValidationNamesTheBadField) {
+  EXPECT_EQ(ScanMatcherOptions().validate(), "");
+  ScanMatcherOptions o;
+  o.correspondence_distance = 0.0;
+  EXPECT_NE(o.validate().find("correspondence_distance"), std::string::npos);
+  o = ScanMatcherOptions();
+  o.initial_correspondence_distance = 0.1;  // below the final gate
+  EXPECT_NE(o.validate().find("initial_correspondence_distance"), std::string::npos);
+  o = ScanMatcherOptions();
+  o.min_inlier_fraction = 1.5;
+  EXPECT_NE(o.validate().find("min_inlier_fraction"), std::string::npos);
+  o = ScanMatcherOptions();
+  o.map_mode = "everything";
+  EXPECT_NE(o.validate().find("map_mode"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam
