@@ -213,8 +213,10 @@ def score(truth, slam, odom, landmarks, vertices):
     lo = odom_rows[-1]
     odom_final_pos = math.hypot(lo[3][0] - lo[2][0], lo[3][1] - lo[2][1])
     odom_final_head = abs(math.degrees(wrap(lo[3][2] - lo[2][2])))
-    odom_mean_pos = float(np.mean([math.hypot(r[3][0] - r[2][0], r[3][1] - r[2][1])
-                                   for r in odom_rows]))
+    odom_errors = [math.hypot(r[3][0] - r[2][0], r[3][1] - r[2][1]) for r in odom_rows]
+    odom_mean_pos = float(np.mean(odom_errors))
+    odom_max_pos = float(np.max(odom_errors))
+    max_pos = float(np.max([math.hypot(r[4][0], r[4][1]) for r in rows]))
     n_eff = effective_samples(nees) if nees else 0.0
     band = nees_band(3, n_eff) if n_eff >= 1 else (float("nan"), float("nan"))
 
@@ -248,6 +250,8 @@ def score(truth, slam, odom, landmarks, vertices):
         "odometry_final_position_error": odom_final_pos,
         "odometry_final_heading_error_deg": odom_final_head,
         "odometry_mean_position_error": odom_mean_pos,
+        "odometry_max_position_error": odom_max_pos,
+        "max_position_error": max_pos,
         "nees_average": float(np.mean(nees)) if nees else float("nan"),
         "nees_samples": len(nees),
         "nees_effective_samples": n_eff,
@@ -266,8 +270,9 @@ def report_text(r):
         "final pose error: %.3f m, %.2f deg (odometry alone: %.3f m, %.2f deg)" % (
             r["final_position_error"], r["final_heading_error_deg"],
             r["odometry_final_position_error"], r["odometry_final_heading_error_deg"]),
-        "mean position error: %.3f m (odometry alone: %.3f m)" % (
-            r["mean_position_error"], r["odometry_mean_position_error"]),
+        "mean position error: %.3f m, largest %.3f m (odometry alone: %.3f m, largest %.3f m)" % (
+            r["mean_position_error"], r["max_position_error"], r["odometry_mean_position_error"],
+            r["odometry_max_position_error"]),
         "average pose NEES: %.2f over %d poses (%.0f independent), 95%% band %.2f..%.2f "
         "(truth matched to %.0f mm, %.0f mrad)" % (
             r["nees_average"], r["nees_samples"], r["nees_effective_samples"],

@@ -150,6 +150,9 @@ std::string AssociationOptions::validate() const {
   if (!(merge_probability >= 0.0 && merge_probability < 1.0)) {
     return "merge_probability must be in [0, 1) (0: no merging)";
   }
+  if (!(merge_bias_sigma >= 0.0 && std::isfinite(merge_bias_sigma))) {
+    return "merge_bias_sigma must be finite and >= 0 (m)";
+  }
   if (!(merge_distance >= 0.0 && std::isfinite(merge_distance))) {
     return "merge_distance must be finite and >= 0 (m)";
   }

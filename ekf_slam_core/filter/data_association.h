@@ -36,6 +36,10 @@ struct AssociationOptions {
   // landmark; after the loop closes the two converge and are merged. 0: off.
   double merge_probability = 0.95;
   double merge_distance = 0.5;
+  // m: how far two extractions of one corner may disagree beyond their noise
+  // model (a corner vs a segment end of the same box, a rasterised corner
+  // seen from two sides); added as b²I to the merge test and update.
+  double merge_bias_sigma = 0.02;
 
   std::string validate() const;
 };

@@ -300,7 +300,7 @@ int EkfSlam::pruneTentative() {
   return static_cast<int>(slots.size());
 }
 
-FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate) {
+FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate, double bias_sigma) {
   const int a = slotOf(keep_id), b = slotOf(drop_id);
   if (a < 0 || b < 0 || a == b) return FilterStatus::kUnknownLandmark;
   const int n = dim_;
@@ -310,13 +310,15 @@ FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate) {
   const Eigen::MatrixXd PHt = P.middleCols<2>(ia) - P.middleCols<2>(ib);  // n × 2
   Matrix2 S = PHt.middleRows<2>(ia) - PHt.middleRows<2>(ib);
   S = 0.5 * (S + S.transpose()).eval();
+  S += bias_sigma * bias_sigma * Matrix2::Identity();
   const Vector2 difference = x_.segment<2>(ia) - x_.segment<2>(ib);
   const Eigen::LLT<Matrix2> llt(S);
   if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
     return FilterStatus::kSingularInnovation;
   }
   if (!(difference.dot(llt.solve(difference)) < gate)) return FilterStatus::kBadObservation;
-  // Condition on x_a − x_b = 0: x −= W L⁻¹ d, P −= W Wᵀ with W = P Hᵀ L⁻ᵀ.
+  // Condition on x_a − x_b = 0 (noise b²I): x −= W L⁻¹ d, P −= W Wᵀ with
+  // W = P Hᵀ L⁻ᵀ.
   const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // 2 × n
   const Vector2 whitened = llt.matrixL().solve(difference);
   x_.head(n).noalias() -= Wt.transpose() * whitened;
@@ -332,7 +334,7 @@ FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate) {
 }
 
 std::vector<std::pair<int, int>> EkfSlam::mergeDuplicates(const std::vector<int>& ids, double gate,
-                                                          double max_distance) {
+                                                          double max_distance, double bias_sigma) {
   std::vector<std::pair<int, int>> merged;
   for (int id : ids) {
     bool again = true;
@@ -349,7 +351,7 @@ std::vector<std::pair<int, int>> EkfSlam::mergeDuplicates(const std::vector<int>
         // Keep the older landmark (smaller id: created first).
         const int other_id = landmarks_[other].id;
         const int keep = std::min(id, other_id), drop = std::max(id, other_id);
-        if (mergeLandmarks(keep, drop, gate) == FilterStatus::kOk) {
+        if (mergeLandmarks(keep, drop, gate, bias_sigma) == FilterStatus::kOk) {
           merged.emplace_back(keep, drop);
           id = keep;
           again = true;

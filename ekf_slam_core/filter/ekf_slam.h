@@ -97,19 +97,21 @@ class EkfSlam {
 
   // Two landmarks that are one: the joint covariance says their difference is
   // zero within the gate (squared Mahalanobis distance of x_a − x_b under
-  // P_aa + P_bb − P_ab − P_ba below `gate`). Fuses them by conditioning the
-  // whole state on x_a = x_b (an exact constraint, so nothing either held is
-  // lost), then removes `drop_id`; `keep_id` gains its sightings.
+  // P_aa + P_bb − P_ab − P_ba + b²I below `gate`, where b (m) is how far two
+  // extractions of the same corner may disagree beyond their noise model:
+  // a corner and a segment end, or two views of a rasterised corner). Fuses
+  // them by conditioning the whole state on x_a − x_b ~ N(0, b²I) (b = 0: an
+  // exact constraint), then removes `drop_id`; `keep_id` gains its sightings.
   // kUnknownLandmark for a missing id, kBadObservation when the two are
   // farther apart than the gate allows (nothing changes then),
   // kSingularInnovation when the difference covariance is not positive.
-  FilterStatus mergeLandmarks(int keep_id, int drop_id, double gate);
+  FilterStatus mergeLandmarks(int keep_id, int drop_id, double gate, double bias_sigma = 0.0);
 
   // Checks each landmark of `ids` against every landmark within
   // `max_distance` (m) and merges pairs that are one (mergeLandmarks with
   // `gate`), keeping the older landmark. Returns the (kept, dropped) pairs.
   std::vector<std::pair<int, int>> mergeDuplicates(const std::vector<int>& ids, double gate,
-                                                   double max_distance);
+                                                   double max_distance, double bias_sigma = 0.0);
 
   // Seeds a landmark from a prior map (e.g. one saved earlier): mean and
   // covariance in the map frame, uncorrelated with the pose and the other

@@ -309,6 +309,29 @@ TEST(EkfSlam, DistinctLandmarksAreNotMergedAndNothingChanges) {
   EXPECT_EQ(filter.state(), x);
 }
 
+// With a bias allowance b the merge is the constrained update with R = b²I.
+TEST(EkfSlam, MergingWithABiasAllowanceIsTheUpdateWithThatNoise) {
+  EkfSlam filter = builtFilter();
+  int twin = -1;
+  ASSERT_EQ(filter.augment(observation(1.8, 0.32), &twin), FilterStatus::kOk);
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  const int n = filter.stateDim();
+  MatrixXd H = MatrixXd::Zero(2, n);
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
+  const double b = 0.03;
+  const MatrixXd S = H * P * H.transpose() + b * b * MatrixXd::Identity(2, 2);
+  const MatrixXd K = P * H.transpose() * S.inverse();
+  const VectorXd x_expected = x - K * (H * x);
+  const MatrixXd P_expected = P - K * S * K.transpose();
+  ASSERT_EQ(filter.mergeLandmarks(filter.landmarks()[0].id, twin, 9.21, b), FilterStatus::kOk);
+  std::vector<int> keep;
+  for (int i = 0; i < n - 2; ++i) keep.push_back(i);
+  EXPECT_LT((filter.state() - x_expected(keep)).norm(), 1e-12);
+  EXPECT_LT((filter.covariance() - P_expected(keep, keep)).norm(), 1e-12);
+}
+
 TEST(EkfSlam, MergeDuplicatesKeepsTheOlderLandmark) {
   EkfSlam filter = builtFilter();
   int twin = -1;

@@ -38,7 +38,8 @@ void observe(EkfSlam& filter, const AssociationOptions& association,
     std::vector<int> touched = report.new_landmark_ids;
     for (const PointMatch& m : report.matches) touched.push_back(m.landmark_id);
     report.merged = filter.mergeDuplicates(
-        touched, chiSquareQuantile(association.merge_probability, 2.0), association.merge_distance);
+        touched, chiSquareQuantile(association.merge_probability, 2.0), association.merge_distance,
+        association.merge_bias_sigma);
   }
 }
 

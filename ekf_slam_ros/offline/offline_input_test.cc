@@ -29,6 +29,21 @@ const std::string kSource = EKF_SLAM_SOURCE_DIR;
 constexpr double kIntel500TranslationThreshold = 0.025;         // m
 constexpr double kIntel500RotationThreshold = 0.6 * kPi / 180;  // rad
 
+// The simulator's file loads and differs from the defaults only where it
+// says: the motion noise (a random walk) and the control (raw odometry).
+TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
+  SlamConfig sim, shipped;
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_sim.yaml", &sim), "");
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam.yaml", &shipped), "");
+  EXPECT_FALSE(sim.pipeline.scan_matching.enabled);
+  EXPECT_GT(sim.pipeline.filter.motion_noise.rot_per_metre, 0.0);
+  EXPECT_EQ(sim.pipeline.filter.motion_noise.trans_per_trans, 0.0);
+  EXPECT_EQ(sim.pipeline.features.split_threshold, shipped.pipeline.features.split_threshold);
+  EXPECT_EQ(sim.pipeline.association.merge_probability,
+            shipped.pipeline.association.merge_probability);
+  EXPECT_EQ(sim.map.resolution, shipped.map.resolution);
+}
+
 TEST(SlamConfig, ShippedFileLoadsAndMatchesTheDefaults) {
   SlamConfig config;
   ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam.yaml", &config), "");

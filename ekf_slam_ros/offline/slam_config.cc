@@ -95,6 +95,7 @@ void bindAssociation(YamlBinder b, AssociationOptions* a) {
   b.number("new_landmark_probability", &a->new_landmark_probability, 1e-9, 1.0 - 1e-12);
   b.number("merge_probability", &a->merge_probability, 0.0, 1.0 - 1e-12);
   b.number("merge_distance", &a->merge_distance, 0.0, 1e3);
+  b.number("merge_bias_sigma", &a->merge_bias_sigma, 0.0, 1.0);
   b.integer("jcbb_max_nodes", &a->jcbb_max_nodes, 1, 100000000);
   b.rejectUnknownKeys();
 }
