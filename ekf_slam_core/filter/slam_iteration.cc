@@ -37,9 +37,9 @@ void observe(EkfSlam& filter, const AssociationOptions& association,
   if (association.merge_probability > 0.0) {
     std::vector<int> touched = report.new_landmark_ids;
     for (const PointMatch& m : report.matches) touched.push_back(m.landmark_id);
-    report.merged = filter.mergeDuplicates(
-        touched, chiSquareQuantile(association.merge_probability, 2.0), association.merge_distance,
-        association.merge_bias_sigma);
+    report.merged =
+        filter.mergeDuplicates(touched, chiSquareQuantile(association.merge_probability, 2.0),
+                               association.merge_distance, association.merge_bias_sigma);
   }
 }
 
