@@ -95,6 +95,17 @@ FilterStatus EkfSlam::predict(const OdometryControl& u, double dt) {
   Matrix3 F, G;
   const Pose2 predicted = applyControl(pose(), u, &F, &G);
   const Matrix3 Q = controlCovariance(u, options_.motion_noise);
+  if (options_.first_estimate_jacobians) {
+    // F's heading column is (−Δy, Δx) of the motion; take Δ between the
+    // predicted positions of this and the previous step, not from the
+    // corrected one.
+    if (have_prior_position_) {
+      F(0, 2) = -(predicted.y - prior_position_.y());
+      F(1, 2) = predicted.x - prior_position_.x();
+    }
+    prior_position_ = predicted.translation();
+    have_prior_position_ = true;
+  }
 
   x_.head<3>() = predicted.vector();
   const int m = dim_ - kPoseDim;
@@ -118,6 +129,15 @@ bool EkfSlam::predictObservation(int slot, Prediction* out) const {
   if (!predictPointObservation(pose(), options_.laser_pose, landmarkPosition(slot), &out->z,
                                &out->H_robot, &out->H_landmark)) {
     return false;
+  }
+  if (options_.first_estimate_jacobians) {
+    // The prediction from the current estimate, the Jacobians at the
+    // landmark's first estimate.
+    RangeBearing unused;
+    if (!predictPointObservation(pose(), options_.laser_pose, landmarks_[slot].first_estimate,
+                                 &unused, &out->H_robot, &out->H_landmark)) {
+      return false;
+    }
   }
   const Matrix23& Hr = out->H_robot;
   const Matrix2& Hm = out->H_landmark;
@@ -252,6 +272,7 @@ FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) 
 
   LandmarkInfo info;
   info.id = next_id_++;
+  info.first_estimate = m;
   info.observations = 1;
   info.created_step = step_;
   info.last_seen_step = step_;
@@ -278,6 +299,7 @@ FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2
 
   LandmarkInfo info;
   info.id = id;
+  info.first_estimate = position;
   info.observations = std::max(1, observations);
   info.created_step = step_;
   info.last_seen_step = step_;

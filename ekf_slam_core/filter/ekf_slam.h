@@ -34,6 +34,13 @@ struct FilterOptions {
   double max_step_translation = 1.0;     // m: a larger odometry increment is a jump
   double max_step_rotation = kPi / 2.0;  // rad: |rot1| + |rot2| beyond this is a jump
   long tentative_max_age = 10;           // steps a once-seen landmark may wait; 0 = keep all
+  // First-estimates Jacobians (Huang, Mourikis & Roumeliotis 2008): F uses the
+  // predicted positions of consecutive steps and H each landmark's first
+  // estimate, so that the linearised system keeps the unobservable global
+  // heading unobservable. The standard EKF evaluates them at the newest
+  // estimates and gains spurious heading information: its heading is
+  // overconfident on long runs. Off: the textbook EKF (thesis).
+  bool first_estimate_jacobians = false;
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -46,9 +53,10 @@ struct PointObservation {
 
 struct LandmarkInfo {
   int id = -1;
-  int observations = 0;     // the creating observation plus every accepted match
-  long created_step = 0;    // filter step at augmentation
-  long last_seen_step = 0;  // filter step of the last match
+  int observations = 0;                      // the creating observation plus every accepted match
+  long created_step = 0;                     // filter step at augmentation
+  long last_seen_step = 0;                   // filter step of the last match
+  Vector2 first_estimate = Vector2::Zero();  // position when created (first-estimates Jacobians)
 };
 
 struct PointMatch {
@@ -162,6 +170,8 @@ class EkfSlam {
   int next_id_ = 0;
   long step_ = 0;
   Matrix3 last_F_ = Matrix3::Identity();
+  bool have_prior_position_ = false;  // first-estimates Jacobians: the last predicted position
+  Vector2 prior_position_ = Vector2::Zero();
   bool mapping_enabled_ = true;
 };
 

@@ -346,6 +346,44 @@ TEST(EkfSlam, MergeDuplicatesKeepsTheOlderLandmark) {
   EXPECT_EQ(filter.landmarkCount(), count - 1);
 }
 
+// First-estimates Jacobians: F's heading column from the predicted positions
+// of consecutive steps, H at the landmark's first estimate; the predicted
+// measurement itself still from the newest estimate.
+TEST(EkfSlam, FirstEstimatesJacobiansUseThePriorPositionsAndFirstLandmarkEstimates) {
+  FilterOptions options = testOptions();
+  options.first_estimate_jacobians = true;
+  EkfSlam filter(options, Pose2(0.5, -0.2, 0.3), Matrix3::Identity() * 0.01);
+  int id = -1;
+  ASSERT_EQ(filter.augment(observation(2.0, 0.4), &id), FilterStatus::kOk);
+  const Vector2 first = filter.landmarkPosition(0);
+  ASSERT_EQ(filter.predict(Pose2(), Pose2(0.3, 0.05, 0.1), 0.2), FilterStatus::kOk);
+  const Pose2 predicted1 = filter.pose();
+  ASSERT_EQ(filter.update({observation(1.8, 0.35)}, {{0, id}}), FilterStatus::kOk);
+  const Pose2 corrected1 = filter.pose();
+  ASSERT_GT((corrected1.translation() - predicted1.translation()).norm(), 1e-4);
+  ASSERT_GT((filter.landmarkPosition(0) - first).norm(), 1e-4);
+  ASSERT_EQ(filter.predict(Pose2(0.3, 0.05, 0.1), Pose2(0.6, 0.1, 0.2), 0.2), FilterStatus::kOk);
+  const Pose2 predicted2 = filter.pose();
+  const Matrix3& F = filter.lastMotionJacobian();
+  EXPECT_NEAR(F(0, 2), -(predicted2.y - predicted1.y), 1e-12);
+  EXPECT_NEAR(F(1, 2), predicted2.x - predicted1.x, 1e-12);
+  EXPECT_GT(std::abs(F(0, 2) + (predicted2.y - corrected1.y)), 1e-6);  // not the textbook one
+
+  EkfSlam::Prediction p;
+  ASSERT_TRUE(filter.predictObservation(0, &p));
+  RangeBearing z_newest, z_first;
+  Matrix23 Hr;
+  Matrix2 Hm;
+  ASSERT_TRUE(predictPointObservation(filter.pose(), options.laser_pose, filter.landmarkPosition(0),
+                                      &z_newest));
+  ASSERT_TRUE(
+      predictPointObservation(filter.pose(), options.laser_pose, first, &z_first, &Hr, &Hm));
+  EXPECT_EQ(p.z.range, z_newest.range);
+  EXPECT_EQ(p.z.bearing, z_newest.bearing);
+  EXPECT_TRUE(p.H_robot.isApprox(Hr, 1e-14));
+  EXPECT_TRUE(p.H_landmark.isApprox(Hm, 1e-14));
+}
+
 TEST(EkfSlam, OptionsValidationNamesTheField) {
   FilterOptions options;
   EXPECT_EQ(options.validate(), "");

@@ -53,6 +53,7 @@ void bindFilter(YamlBinder b, FilterOptions* f, bool* laser_pose_given) {
     *laser_pose_given = true;
   }
   b.number("max_step_translation", &f->max_step_translation, 1e-6, kHuge);
+  b.boolean("first_estimate_jacobians", &f->first_estimate_jacobians);
   b.number("max_step_rotation", &f->max_step_rotation, 1e-6, 2 * kPi);
   b.integer("tentative_max_age", &f->tentative_max_age, 0L, 1000000L);
   bindMotionNoise(b.child("motion_noise"), &f->motion_noise);
