@@ -177,9 +177,14 @@ def score(truth, slam, odom, landmarks, vertices):
     cov3x3)] (map frame); landmarks: [(id, x, y, cov2x2)] (map frame);
     vertices: [(x, y)] world. Returns a dict of results plus the aligned
     tracks."""
-    usable = [s for s in slam if interpolate(truth, s[0]) is not None]
+    # Poses the truth and the odometry both cover (the monitor may have
+    # subscribed a moment after the first SLAM pose was published).
+    usable = [s for s in slam
+              if interpolate(truth, s[0]) is not None and interpolate(odom, s[0]) is not None]
     if len(usable) < 2:
-        raise RuntimeError("fewer than 2 SLAM poses overlap the ground truth in time")
+        raise RuntimeError("fewer than 2 SLAM poses overlap the ground truth and the odometry "
+                           "in time (%d SLAM poses, %d truth, %d odometry samples)" %
+                           (len(slam), len(truth), len(odom)))
     t0 = usable[0][0]
     world_map = compose(interpolate(truth, t0), inverse(usable[0][1:4]))
     map_world = inverse(world_map)
