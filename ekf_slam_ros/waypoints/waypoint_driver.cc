@@ -23,7 +23,7 @@
 #include <memory>
 #include <string>
 
-#include "ekf_slam_ros/simulator/private_params.h"
+#include "ekf_slam_ros/params/private_params.h"
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
 #include "ekf_slam_ros/waypoints/waypoint_file.h"
 

@@ -2,8 +2,8 @@
 // project asks of every node: each value range-checked, unknown keys
 // (typos) rejected, and every message naming the full parameter, e.g.
 //   "/simulator/robot_radius: must be in [0.05, 1], got 3".
-// Keys that are not set keep the struct's default. Used by simulator_node
-// and waypoint_driver.
+// Keys that are not set keep the struct's default. Used by simulator_node,
+// waypoint_driver, ekf_slam_node and feature_node.
 #pragma once
 
 #include <ros/node_handle.h>
