@@ -135,25 +135,10 @@ def read_world_image(yaml_path):
     import yaml
     with open(yaml_path) as f:
         meta = yaml.safe_load(f)
-    image = os.path.join(os.path.dirname(yaml_path), meta["image"])
-    with open(image, "rb") as f:
-        data = f.read()
-    # P5 header: magic, optional comments, width height, maxval.
-    tokens, pos = [], 0
-    while len(tokens) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
-            continue
-        end = pos
-        while not data[end:end + 1].isspace():
-            end += 1
-        tokens.append(data[pos:end])
-        pos = end
-    width, height = int(tokens[1]), int(tokens[2])
-    pixels = np.frombuffer(data[pos + 1:pos + 1 + width * height], dtype=np.uint8)
-    pixels = pixels.reshape(height, width)
+    sys.path.insert(0, HERE)
+    from plot_offline import read_pgm  # noqa: E402  (the project's PGM reader)
+    pixels = read_pgm(os.path.join(os.path.dirname(yaml_path), meta["image"]))
+    height = pixels.shape[0]
     res = float(meta["resolution"])
     ox, oy = meta["origin"][0], meta["origin"][1]
     rows, cols = np.nonzero(pixels < 128)
