@@ -60,6 +60,13 @@ class BadParameters(unittest.TestCase):
         finally:
             os.unlink(path)
 
+    def test_unknown_input_mode_names_the_key(self):
+        self.check("ekf_slam_node", "input", "_input:=laser")
+
+    def test_features_input_with_scan_matching_names_the_conflict(self):
+        # The built-in defaults have scan matching on; it needs the scans.
+        self.check("ekf_slam_node", "scan_matching.enabled", "_input:=features")
+
     def test_unreadable_initial_map_is_reported(self):
         self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",
                    "_initial_map:=/nonexistent/landmarks.yaml")

@@ -1,7 +1,9 @@
 #include "ekf_slam_core/features/extract_features.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "ekf_slam_core/features/split_and_merge.h"
 
@@ -188,6 +190,29 @@ int FeatureSet::countLandmarkCandidates() const {
   int count = 0;
   for (const PointFeature& f : points_of_interest) count += f.landmark_candidate ? 1 : 0;
   return count;
+}
+
+std::string validateFeatureSet(const FeatureSet& features) {
+  if (!features.error.empty()) return "the extraction failed: " + features.error;
+  for (size_t i = 0; i < features.points_of_interest.size(); ++i) {
+    const PointFeature& point = features.points_of_interest[i];
+    if (!point.landmark_candidate) continue;  // never reaches the filter
+    const Matrix2& c = point.range_bearing_covariance;
+    const char* why = nullptr;
+    if (!(std::isfinite(point.range) && point.range > 0.0)) {
+      why = "range is not a positive finite number";
+    } else if (!std::isfinite(point.bearing)) {
+      why = "bearing is not finite";
+    } else if (!c.allFinite()) {
+      why = "range-bearing covariance is not finite";
+    } else if (std::abs(c(0, 1) - c(1, 0)) > 1e-9 * std::max(1e-12, c.diagonal().maxCoeff())) {
+      why = "range-bearing covariance is not symmetric";
+    } else if (!(c(0, 0) > 0.0 && c(1, 1) > 0.0 && c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0) > 0.0)) {
+      why = "range-bearing covariance is not positive definite";
+    }
+    if (why != nullptr) return "point " + std::to_string(i) + ": " + why;
+  }
+  return "";
 }
 
 FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options) {

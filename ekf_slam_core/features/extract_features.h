@@ -88,6 +88,13 @@ struct FeatureSet {
   int countLandmarkCandidates() const;
 };
 
+// Checks features that did not come straight from extractFeatures (a
+// message from another node, a file): every landmark candidate must have a
+// positive finite range, a finite bearing and a symmetric positive-definite
+// range–bearing covariance, because the filter inverts it. Empty when usable,
+// else names the first bad point and why.
+std::string validateFeatureSet(const FeatureSet& features);
+
 // Runs every stage. Never throws; bad options or scan geometry give an empty
 // set with `error` naming the bad field; invalid readings are skipped.
 FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options);

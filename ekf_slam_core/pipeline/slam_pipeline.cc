@@ -81,7 +81,17 @@ Pose2 SlamPipeline::mapToOdom() const {
   return compose(filter_.pose(), inverse(last_raw_odometry_));
 }
 
-ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry) {
+ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
+  return process(scan.stamp, &scan, nullptr, odometry);
+}
+
+ScanResult SlamPipeline::processFeatures(double stamp, const FeatureSet& features,
+                                         const Pose2& odometry) {
+  return process(stamp, nullptr, &features, odometry);
+}
+
+ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSet* features,
+                                 const Pose2& raw_odometry) {
   ++counters_.scans;
   // Below, `odometry` is the control source's pose: scan-matched or raw.
   Pose2 odometry = raw_odometry;
@@ -89,7 +99,7 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
   ScanResult out;
   auto record = [&]() {
     ScanRecord r;
-    r.stamp = scan.stamp;
+    r.stamp = stamp;
     r.filtered = out.pose;
     r.odometry = odometry;
     r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
@@ -97,12 +107,19 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
     records_.push_back(r);
   };
 
-  const std::string scan_error = validateScan(scan);
-  const bool usable = odometry.allFinite() && scan_error.empty() && std::isfinite(scan.stamp);
+  std::string input_error;
+  if (scan != nullptr) {
+    input_error = validateScan(*scan);
+  } else if (scan_matcher_) {
+    input_error = "features given without their scan, but scan matching (enabled) needs the scan";
+  } else {
+    input_error = validateFeatureSet(*features);
+  }
+  const bool usable = odometry.allFinite() && input_error.empty() && std::isfinite(stamp);
   if (scan_matcher_ && odometry.allFinite()) {
     if (usable) {
       MatchResult match;
-      odometry = scan_matcher_->process(scan, raw_odometry, options_.filter.laser_pose, &match);
+      odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
       if (match.ok) {
         ++counters_.scan_matches;
       } else {
@@ -115,9 +132,9 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
   if (!usable) {
     ++counters_.bad_input;
     out.outcome = ScanOutcome::kRejectedBadInput;
-    out.message = !odometry.allFinite() ? "odometry pose is not finite"
-                  : !scan_error.empty() ? scan_error
-                                        : "scan stamp is not finite";
+    out.message = !odometry.allFinite()  ? "odometry pose is not finite"
+                  : !input_error.empty() ? input_error
+                                         : "scan stamp is not finite";
     if (!odometry.allFinite()) {
       out.pose = filter_.pose();
       return out;  // no usable odometry: nothing to record against
@@ -130,20 +147,20 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
   if (!initialised_) {
     last_odometry_ = odometry;
     last_raw_odometry_ = raw_odometry;
-    last_stamp_ = scan.stamp;
+    last_stamp_ = stamp;
     initialised_ = true;
-    iterate(scan, odometry, /*predict=*/false, 0.0, &out);
+    iterate(stamp, scan, features, odometry, /*predict=*/false, 0.0, &out);
     record();
     return out;
   }
 
-  const double dt = scan.stamp - last_stamp_;
+  const double dt = stamp - last_stamp_;
   if (!(dt > 0.0)) {
     ++counters_.time_not_increasing;
     out.outcome = ScanOutcome::kSkippedTimeNotIncreasing;
     std::ostringstream message;
     message.precision(6);
-    message << std::fixed << "scan stamp " << scan.stamp << " is not after the last iteration's "
+    message << std::fixed << "scan stamp " << stamp << " is not after the last iteration's "
             << last_stamp_ << " (" << dt << " s): scan not used for an update";
     out.message = message.str();
     out.pose = deadReckoned(odometry);
@@ -162,13 +179,13 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
     return out;
   }
 
-  iterate(scan, odometry, /*predict=*/true, dt, &out);
+  iterate(stamp, scan, features, odometry, /*predict=*/true, dt, &out);
   record();
   return out;
 }
 
-void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt,
-                           ScanResult* out) {
+void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* features,
+                           const Pose2& odometry, bool predict, double dt, ScanResult* out) {
   if (predict) {
     const FilterStatus status = filter_.predict(last_odometry_, odometry, dt);
     if (status != FilterStatus::kOk) {
@@ -183,7 +200,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
         message << "; odometry re-anchored, the increment is discarded";
         last_odometry_ = odometry;  // re-anchor: later increments start from here
         last_raw_odometry_ = current_raw_odometry_;
-        last_stamp_ = scan.stamp;
+        last_stamp_ = stamp;
       } else {
         ++counters_.bad_input;
         out->outcome = ScanOutcome::kRejectedBadInput;
@@ -196,9 +213,9 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   }
   last_odometry_ = odometry;
   last_raw_odometry_ = current_raw_odometry_;
-  last_stamp_ = scan.stamp;
+  last_stamp_ = stamp;
 
-  out->features = extractFeatures(scan, options_.features);
+  out->features = scan != nullptr ? extractFeatures(*scan, options_.features) : *features;
   for (const PointFeature& point : out->features.points_of_interest) {
     if (!point.landmark_candidate || point.range > options_.max_landmark_range) continue;
     PointObservation obs;
@@ -208,7 +225,7 @@ void SlamPipeline::iterate(const Scan& scan, const Pose2& odometry, bool predict
   }
   out->iteration.predict_status = FilterStatus::kOk;
   observe(filter_, options_.association, out->observations, &out->iteration);
-  recorder_.addFiltered(scan.stamp, filter_.pose(), filter_.poseCovariance());
+  recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
 
   ++counters_.iterations;
   if (out->iteration.update_status != FilterStatus::kOk) ++counters_.update_failures;

@@ -16,7 +16,8 @@
 //   (the thesis iterates after each discrete motion); dead-reckoned pose.
 // - An odometry increment beyond the filter's jump bounds: the increment is
 //   discarded (the odometry is re-anchored), no iteration.
-// - A scan whose geometry is unusable: no iteration, pose dead-reckoned.
+// - A scan whose geometry is unusable (or features with non-finite values):
+//   no iteration, pose dead-reckoned.
 #pragma once
 
 #include <memory>
@@ -116,6 +117,14 @@ class SlamPipeline {
   // `odometry` is the robot's raw odom → base_link at the scan's stamp.
   ScanResult processScan(const Scan& scan, const Pose2& odometry);
 
+  // The same iteration from features already extracted from a scan (for
+  // example by a separate feature node): `features` in the laser frame, as
+  // extractFeatures gives them; `stamp` the scan's stamp. Only the point
+  // features that are landmark candidates are used, as in processScan, so
+  // extractFeatures(scan) in gives bit-identical results. Scan matching needs
+  // the scan itself: with scan_matching.enabled the input is rejected.
+  ScanResult processFeatures(double stamp, const FeatureSet& features, const Pose2& odometry);
+
   const EkfSlam& filter() const { return filter_; }
   // For seeding a prior map (EkfSlam::addLandmark) and switching to
   // localisation only, before or between scans; not during processScan.
@@ -135,7 +144,12 @@ class SlamPipeline {
   std::vector<StampedPose> filteredScanPoses() const;
 
  private:
-  void iterate(const Scan& scan, const Pose2& odometry, bool predict, double dt, ScanResult* out);
+  // One input: a scan (features extracted here) or features extracted
+  // elsewhere; exactly one of the two is non-null.
+  ScanResult process(double stamp, const Scan* scan, const FeatureSet* features,
+                     const Pose2& raw_odometry);
+  void iterate(double stamp, const Scan* scan, const FeatureSet* features, const Pose2& odometry,
+               bool predict, double dt, ScanResult* out);
   Pose2 deadReckoned(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
 

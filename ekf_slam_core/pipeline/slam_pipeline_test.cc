@@ -176,6 +176,83 @@ TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {
   EXPECT_EQ(pipeline.counters().skipped_no_motion, 15);
 }
 
+// Features extracted elsewhere (feature_node → ekf_slam_node) go through
+// exactly the iteration a scan goes through: bit-identical poses and maps.
+TEST(SlamPipeline, FeaturesInputGivesTheSameAnswerAsScans) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(5);
+  const PipelineOptions options = defaultOptions(laser);
+  SlamPipeline from_scans(options), from_features(options);
+  Pose2 odometry;
+  for (int i = 0; i <= 30; ++i) {
+    const Pose2 truth(0.1 * i, 0.02 * i, 0.01 * i);
+    const Scan scan = scanAt(world, compose(truth, laser), 0.1 * i, &rng);
+    odometry = compose(truth, Pose2(0.003 * i, 0.0, 0.001 * i));  // drifting odometry
+    const ScanResult a = from_scans.processScan(scan, odometry);
+    const ScanResult b = from_features.processFeatures(
+        scan.stamp, extractFeatures(scan, options.features), odometry);
+    ASSERT_EQ(a.outcome, b.outcome) << "scan " << i;
+    EXPECT_EQ(maxAbsDifference(a.pose, b.pose), 0.0) << "scan " << i;
+    EXPECT_EQ(a.iteration.matches.size(), b.iteration.matches.size());
+  }
+  EXPECT_EQ(from_scans.filter().landmarkCount(), from_features.filter().landmarkCount());
+  EXPECT_GT(from_features.filter().landmarkCount(), 3);
+  EXPECT_EQ((from_scans.filter().covariance() - from_features.filter().covariance()).norm(), 0.0);
+  EXPECT_EQ(from_features.counters().iterations, 31);
+}
+
+// Features from outside can be corrupt; the filter would invert a bad
+// covariance. They are refused, named, and the map is not touched.
+TEST(SlamPipeline, CorruptFeaturesAreRefusedAndNamed) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(6);
+  const PipelineOptions options = defaultOptions(laser);
+  SlamPipeline pipeline(options);
+  const Scan scan = scanAt(world, laser, 1.0, &rng);
+  const FeatureSet good = extractFeatures(scan, options.features);
+  ASSERT_GT(good.countLandmarkCandidates(), 0);
+  EXPECT_EQ(validateFeatureSet(good), "");
+  ASSERT_EQ(pipeline.processFeatures(1.0, good, Pose2()).outcome, ScanOutcome::kIterated);
+  const int landmarks = pipeline.filter().landmarkCount();
+  const Eigen::MatrixXd covariance = pipeline.filter().covariance();
+
+  int candidate = 0;
+  while (!good.points_of_interest[candidate].landmark_candidate) ++candidate;
+  struct Corruption {
+    const char* expected;
+    void (*apply)(PointFeature*);
+  };
+  const Corruption corruptions[] = {
+      {"range", [](PointFeature* p) { p->range = std::nan(""); }},
+      {"range", [](PointFeature* p) { p->range = -1.0; }},
+      {"bearing", [](PointFeature* p) { p->bearing = INFINITY; }},
+      {"not finite", [](PointFeature* p) { p->range_bearing_covariance(1, 1) = std::nan(""); }},
+      {"not symmetric", [](PointFeature* p) { p->range_bearing_covariance(0, 1) += 1e-3; }},
+      {"positive definite", [](PointFeature* p) { p->range_bearing_covariance.setZero(); }},
+  };
+  double stamp = 1.0;
+  for (const Corruption& corruption : corruptions) {
+    FeatureSet bad = good;
+    corruption.apply(&bad.points_of_interest[candidate]);
+    stamp += 0.1;
+    const ScanResult r = pipeline.processFeatures(stamp, bad, Pose2(0.01, 0.0, 0.0));
+    EXPECT_EQ(r.outcome, ScanOutcome::kRejectedBadInput) << corruption.expected;
+    EXPECT_NE(r.message.find(corruption.expected), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("point " + std::to_string(candidate)), std::string::npos);
+  }
+  EXPECT_EQ(pipeline.filter().landmarkCount(), landmarks);
+  EXPECT_EQ((pipeline.filter().covariance() - covariance).norm(), 0.0);
+  EXPECT_EQ(pipeline.counters().bad_input, 6);
+
+  // Scan matching aligns scans; features alone cannot feed it.
+  SlamPipeline matching(defaultOptions(laser, /*scan_matching=*/true));
+  const ScanResult r = matching.processFeatures(1.0, good, Pose2());
+  EXPECT_EQ(r.outcome, ScanOutcome::kRejectedBadInput);
+  EXPECT_NE(r.message.find("scan matching"), std::string::npos);
+}
+
 struct DriveResult {
   double final_error = 0.0, final_heading_error = 0.0, odometry_final_error = 0.0;
   double mean_filtered_error = 0.0, mean_smoothed_error = 0.0;

@@ -25,6 +25,13 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  if (params.input == "features" && config.pipeline.scan_matching.enabled) {
+    ROS_FATAL(
+        "ekf_slam_node: input is 'features' but scan_matching.enabled is true in %s; the scan "
+        "matcher aligns raw scans: set scan_matching.enabled: false there or use input: scan",
+        params.config_file.empty() ? "the built-in defaults" : params.config_file.c_str());
+    return 1;
+  }
   try {
     ekf_slam::SlamNode slam(node, private_node, params, config);
     ros::spin();

@@ -32,6 +32,12 @@ const char* contextName(EndpointContext context) {
   return "unknown";
 }
 
+Matrix2 matrixOf(const boost::array<double, 4>& values) {
+  Matrix2 m;
+  m << values[0], values[1], values[2], values[3];
+  return m;
+}
+
 void copy(const Matrix2& m, boost::array<double, 4>* out) {
   (*out)[0] = m(0, 0);
   (*out)[1] = m(0, 1);
@@ -137,6 +143,57 @@ Features toFeaturesMessage(const FeatureSet& features, const std_msgs::Header& h
     out.lines.push_back(m);
   }
   return out;
+}
+
+bool fromFeaturesMessage(const Features& message, FeatureSet* features, std::string* error) {
+  *features = FeatureSet{};
+  constexpr EndpointContext kContexts[] = {
+      EndpointContext::kCorner,   EndpointContext::kFrontEdge,    EndpointContext::kOccluded,
+      EndpointContext::kNoReturn, EndpointContext::kScanBoundary, EndpointContext::kUnresolved,
+  };
+  for (size_t i = 0; i < message.points.size(); ++i) {
+    const FeaturePoint& m = message.points[i];
+    PointFeature p;
+    if (m.kind == kindName(PointKind::kCorner)) {
+      p.kind = PointKind::kCorner;
+    } else if (m.kind == kindName(PointKind::kSegmentEnd)) {
+      p.kind = PointKind::kSegmentEnd;
+    } else {
+      *error =
+          "point " + std::to_string(i) + ": unknown kind '" + m.kind + "' (corner or segment_end)";
+      return false;
+    }
+    bool known_context = false;
+    for (EndpointContext context : kContexts) {
+      if (m.context == contextName(context)) {
+        p.context = context;
+        known_context = true;
+      }
+    }
+    if (!known_context) {
+      *error = "point " + std::to_string(i) + ": unknown context '" + m.context + "'";
+      return false;
+    }
+    p.landmark_candidate = m.landmark_candidate;
+    p.position = Vector2(m.x, m.y);
+    p.covariance = matrixOf(m.covariance);
+    p.range = m.range;
+    p.bearing = m.bearing;
+    p.range_bearing_covariance = matrixOf(m.range_bearing_covariance);
+    features->points_of_interest.push_back(p);
+  }
+  for (const FeatureLine& m : message.lines) {
+    LineFeature l;
+    l.p = m.p;
+    l.theta = m.theta;
+    l.covariance = matrixOf(m.covariance);
+    l.start = Vector2(m.start.x, m.start.y);
+    l.end = Vector2(m.end.x, m.end.y);
+    l.num_points = m.num_points;
+    l.rms_residual = m.rms_residual;
+    features->lines.push_back(l);
+  }
+  return true;
 }
 
 LandmarkMap toLandmarkMapMessage(const EkfSlam& filter, const std_msgs::Header& header) {

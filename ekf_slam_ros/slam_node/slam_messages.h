@@ -10,6 +10,7 @@
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <string>
 #include <vector>
 
 #include "ekf_slam_core/features/extract_features.h"
@@ -30,6 +31,14 @@ CovarianceEllipse covarianceEllipse(const Matrix2& covariance, double probabilit
 
 // Features of one scan, in the scan's frame (`header`).
 Features toFeaturesMessage(const FeatureSet& features, const std_msgs::Header& header);
+
+// Back from the message, for ekf_slam_node's `input: features` mode: the
+// points (with kind, context and candidate flag) and lines. The links between
+// points and lines (PointFeature::line) and the raw readings are not in the
+// message and stay empty. False with `error` naming the point and field when
+// a kind or context string is unknown; values are checked later by
+// validateFeatureSet.
+bool fromFeaturesMessage(const Features& message, FeatureSet* features, std::string* error);
 
 // The filter's map in the map frame (`header`), marginal covariances.
 LandmarkMap toLandmarkMapMessage(const EkfSlam& filter, const std_msgs::Header& header);

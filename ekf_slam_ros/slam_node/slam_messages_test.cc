@@ -100,8 +100,9 @@ TEST(LandmarkMarkers, EllipsesAtTheMeansWithFullAxesLabelsAndTheRobot) {
       const double major = m.id == 4 ? 0.2 : 0.1, minor = m.id == 4 ? 0.05 : 0.1;
       EXPECT_NEAR(m.scale.x, 2.0 * std::sqrt(k) * major, 1e-9);  // full axis = 2 × semi-axis
       EXPECT_NEAR(m.scale.y, 2.0 * std::sqrt(k) * minor, 1e-9);
-      if (m.id == 4)
+      if (m.id == 4) {
         EXPECT_NEAR(2.0 * std::atan2(m.pose.orientation.z, m.pose.orientation.w), 0.3, 1e-9);
+      }
     } else if (m.ns == "landmark_ids") {
       ++labels;
       EXPECT_EQ(m.text, std::to_string(m.id));
@@ -200,6 +201,34 @@ TEST(Messages, FeaturesOfASimulatedRoomKeepEveryPointAndLine) {
     candidates += message.points[i].landmark_candidate;
   }
   EXPECT_GT(candidates, 0);
+
+  // Back again (ekf_slam_node's features input): every value the filter uses
+  // survives the round trip exactly.
+  FeatureSet back;
+  std::string error;
+  ASSERT_TRUE(fromFeaturesMessage(message, &back, &error)) << error;
+  ASSERT_EQ(back.points_of_interest.size(), features.points_of_interest.size());
+  ASSERT_EQ(back.lines.size(), features.lines.size());
+  for (size_t i = 0; i < back.points_of_interest.size(); ++i) {
+    const PointFeature& a = features.points_of_interest[i];
+    const PointFeature& b = back.points_of_interest[i];
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.context, b.context);
+    EXPECT_EQ(a.landmark_candidate, b.landmark_candidate);
+    EXPECT_EQ(a.range, b.range);
+    EXPECT_EQ(a.bearing, b.bearing);
+    EXPECT_EQ(a.range_bearing_covariance, b.range_bearing_covariance);
+    EXPECT_EQ(a.covariance, b.covariance);
+  }
+  for (size_t i = 0; i < back.lines.size(); ++i) {
+    EXPECT_EQ(features.lines[i].covariance, back.lines[i].covariance);
+    EXPECT_EQ(features.lines[i].end, back.lines[i].end);
+  }
+  EXPECT_EQ(validateFeatureSet(back), "");
+  Features unknown = message;
+  unknown.points.back().context = "behind_the_sofa";
+  EXPECT_FALSE(fromFeaturesMessage(unknown, &back, &error));
+  EXPECT_NE(error.find("behind_the_sofa"), std::string::npos) << error;
 
   const visualization_msgs::MarkerArray markers = featureMarkers(features, header);
   ASSERT_EQ(markers.markers.size(), 3u);

@@ -24,6 +24,7 @@ constexpr DropReason kAllReasons[] = {
     DropReason::kLaserTransformMissing,
     DropReason::kQueueOverflow,
     DropReason::kPaused,
+    DropReason::kBadFeatures,
 };
 
 double yawOf(const geometry_msgs::Quaternion& q) {
@@ -57,6 +58,8 @@ const char* toString(DropReason reason) {
       return "queue overflow";
     case DropReason::kPaused:
       return "paused";
+    case DropReason::kBadFeatures:
+      return "bad features";
   }
   return "unknown";
 }
@@ -104,7 +107,11 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   diagnostics_.add("EKF-SLAM", this, &SlamNode::diagnose);
   last_diagnostic_time_ = ros::WallTime::now();
 
-  scan_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
+  if (params_.input == "features") {
+    input_subscriber_ = node_.subscribe(params_.features_topic, 50, &SlamNode::onFeatures, this);
+  } else {
+    input_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
+  }
   tf_timer_ =
       node_.createTimer(ros::Duration(1.0 / params_.tf_publish_rate), &SlamNode::onTfTimer, this);
   // Scans waiting for a late transform are re-tried even when no new scan
@@ -116,28 +123,32 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
 }
 
 void SlamNode::drop(DropReason reason, const std::string& detail) {
-  ++drops_[reason];
-  // Throttled per reason, so one flood does not hide another kind of fault.
-  switch (reason) {
-    case DropReason::kPaused:
-      ROS_DEBUG_THROTTLE(5.0, "ekf_slam_node: paused, scan dropped");
-      break;
-    case DropReason::kStampNotIncreasing:
-      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s", toString(reason),
-                        detail.c_str());
-      break;
-    case DropReason::kTooFewValidReadings:
-    case DropReason::kBadScanGeometry:
-      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s", toString(reason),
-                        detail.c_str());
-      break;
-    default:
-      ROS_WARN_THROTTLE(2.0, "ekf_slam_node: dropped a scan (%s): %s (%ld dropped so far)",
-                        toString(reason), detail.c_str(), drops_[reason]);
+  const long count = ++drops_[reason];
+  if (reason == DropReason::kPaused) {
+    ROS_DEBUG_THROTTLE(5.0, "ekf_slam_node: paused, scan dropped");
+    return;
   }
+  // Throttled per reason (one flood must not hide another kind of fault),
+  // at most one line per reason every log_throttle seconds, with the count
+  // of those not printed in between.
+  constexpr double kLogThrottle = 2.0;  // s, wall time
+  const ros::WallTime now = ros::WallTime::now();
+  auto last = last_drop_log_.find(reason);
+  if (last != last_drop_log_.end() && (now - last->second.time).toSec() < kLogThrottle) {
+    ++last->second.suppressed;
+    return;
+  }
+  const long suppressed = last == last_drop_log_.end() ? 0 : last->second.suppressed;
+  last_drop_log_[reason] = {now, 0};
+  std::ostringstream line;
+  line << "ekf_slam_node: dropped a scan (" << toString(reason) << "): " << detail << " (" << count
+       << " dropped so far";
+  if (suppressed > 0) line << ", " << suppressed << " not logged since the last line";
+  line << ")";
+  ROS_WARN("%s", line.str().c_str());
 }
 
-void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
+bool SlamNode::acceptingInput() {
   ++scans_received_;
   // A bag restarted (or looped) under use_sim_time: the clock runs backwards.
   // The tf buffer would refuse the old-new data; the map is kept (its stamps
@@ -155,42 +166,75 @@ void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
   last_clock_ = now;
   if (paused_) {
     drop(DropReason::kPaused, "");
-    return;
+    return false;
   }
-  PendingScan pending;
-  pending.message = message;
+  return true;
+}
+
+void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
+  if (!acceptingInput()) return;
+  PendingInput pending;
+  pending.header = message->header;
   pending.scan = ros_conversions::fromLaserScan(*message);
   pending.received = ros::Time::now();
   std::ostringstream detail;
   detail.setf(std::ios::fixed);
   detail.precision(3);
-  const std::string geometry = validateScan(pending.scan);
+  const std::string geometry = validateScan(*pending.scan);
   if (!geometry.empty()) {
     detail << "scan at " << message->header.stamp.toSec() << ": " << geometry;
     drop(DropReason::kBadScanGeometry, detail.str());
     return;
   }
-  const int valid = countValidReadings(pending.scan);
+  const int valid = countValidReadings(*pending.scan);
   if (valid < params_.min_valid_readings) {
     detail << "scan at " << message->header.stamp.toSec() << " has " << valid << " of "
-           << pending.scan.size() << " readings usable (min_valid_readings "
+           << pending.scan->size() << " readings usable (min_valid_readings "
            << params_.min_valid_readings << "); the map is not touched";
     drop(DropReason::kTooFewValidReadings, detail.str());
     return;
   }
-  if (last_accepted_stamp_ && !(message->header.stamp > *last_accepted_stamp_)) {
-    detail << "scan stamp " << message->header.stamp.toSec() << " is "
-           << (*last_accepted_stamp_ - message->header.stamp).toSec()
+  enqueue(std::move(pending));
+}
+
+void SlamNode::onFeatures(const Features::ConstPtr& message) {
+  if (!acceptingInput()) return;
+  PendingInput pending;
+  pending.header = message->header;
+  pending.received = ros::Time::now();
+  FeatureSet features;
+  std::string error;
+  if (fromFeaturesMessage(*message, &features, &error)) error = validateFeatureSet(features);
+  if (!error.empty()) {
+    std::ostringstream detail;
+    detail.setf(std::ios::fixed);
+    detail.precision(3);
+    detail << "features at " << message->header.stamp.toSec() << " on "
+           << input_subscriber_.getTopic() << ": " << error << "; the map is not touched";
+    drop(DropReason::kBadFeatures, detail.str());
+    return;
+  }
+  pending.features = std::move(features);
+  enqueue(std::move(pending));
+}
+
+void SlamNode::enqueue(PendingInput pending) {
+  const ros::Time stamp = pending.header.stamp;
+  if (last_accepted_stamp_ && !(stamp > *last_accepted_stamp_)) {
+    std::ostringstream detail;
+    detail.setf(std::ios::fixed);
+    detail.precision(3);
+    detail << "scan stamp " << stamp.toSec() << " is " << (*last_accepted_stamp_ - stamp).toSec()
            << " s before or equal to the last accepted scan's " << last_accepted_stamp_->toSec()
            << "; the map is not touched";
     drop(DropReason::kStampNotIncreasing, detail.str());
     return;
   }
-  last_accepted_stamp_ = message->header.stamp;
-  queue_.push_back(pending);
+  last_accepted_stamp_ = stamp;
+  queue_.push_back(std::move(pending));
   while (static_cast<int>(queue_.size()) > params_.scan_queue_size) {
     std::ostringstream overflow;
-    overflow << "scan at " << queue_.front().message->header.stamp.toSec() << " still waiting for "
+    overflow << "scan at " << queue_.front().header.stamp.toSec() << " still waiting for "
              << "tf when " << params_.scan_queue_size << " newer scans arrived (scan_queue_size)";
     queue_.pop_front();
     drop(DropReason::kQueueOverflow, overflow.str());
@@ -231,18 +275,18 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
 
 void SlamNode::drainQueue() {
   while (!queue_.empty()) {
-    const PendingScan& pending = queue_.front();
-    const ros::Time stamp = pending.message->header.stamp;
-    const std::string& laser_frame = pending.message->header.frame_id;
+    const PendingInput& pending = queue_.front();
+    const ros::Time stamp = pending.header.stamp;
+    const std::string& laser_frame = pending.header.frame_id;
     Pose2 odometry, laser;
     std::string odom_why, laser_why;
     const bool have_odometry =
         lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &odom_why);
     const bool have_laser = lookup(params_.base_frame, laser_frame, stamp, &laser, &laser_why);
     if (have_odometry && have_laser) {
-      const PendingScan scan = pending;
+      const PendingInput input = std::move(queue_.front());
       queue_.pop_front();
-      process(scan, odometry, laser);
+      process(input, odometry, laser);
       continue;
     }
     const double waited = (ros::Time::now() - pending.received).toSec();
@@ -279,10 +323,10 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
 }
 
-void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const Pose2& laser) {
+void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser) {
   if (!pipeline_) {
     createPipeline(laser_pose_ ? *laser_pose_ : laser);
-    laser_frame_ = pending.message->header.frame_id;
+    laser_frame_ = pending.header.frame_id;
     ROS_INFO("ekf_slam_node: started; laser pose %s -> %s: %.3f m, %.3f m, %.2f deg%s",
              params_.base_frame.c_str(), laser_frame_.c_str(), laser_pose_->x, laser_pose_->y,
              radToDeg(laser_pose_->theta), config_.laser_pose_given ? " (configuration)" : " (tf)");
@@ -294,22 +338,25 @@ void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const 
       ROS_WARN_THROTTLE(10.0,
                         "ekf_slam_node: %s -> %s changed by (%.3f m, %.3f m, %.2f deg) since "
                         "start; the filter keeps the pose it started with (reset to adopt it)",
-                        params_.base_frame.c_str(), pending.message->header.frame_id.c_str(), d.x,
-                        d.y, radToDeg(d.theta));
+                        params_.base_frame.c_str(), pending.header.frame_id.c_str(), d.x, d.y,
+                        radToDeg(d.theta));
     }
   }
 
   const size_t records_before = pipeline_->scans().size();
-  const ScanResult result = pipeline_->processScan(pending.scan, odometry);
-  if (pipeline_->scans().size() > records_before) stored_scans_.push_back(pending.scan);
+  const ScanResult result = pending.scan ? pipeline_->processScan(*pending.scan, odometry)
+                                         : pipeline_->processFeatures(pending.header.stamp.toSec(),
+                                                                      *pending.features, odometry);
+  if (pending.scan && pipeline_->scans().size() > records_before) {
+    stored_scans_.push_back(*pending.scan);
+  }
   if (!result.message.empty()) {
-    ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f %s: %s",
-                      pending.message->header.stamp.toSec(), toString(result.outcome),
-                      result.message.c_str());
+    ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f %s: %s", pending.header.stamp.toSec(),
+                      toString(result.outcome), result.message.c_str());
   }
   if (!odometry.allFinite()) return;
 
-  const ros::Time stamp = pending.message->header.stamp;
+  const ros::Time stamp = pending.header.stamp;
   last_scan_stamp_ = stamp;
   map_to_odom_ = pipeline_->mapToOdom();
   have_map_to_odom_ = true;
@@ -365,7 +412,7 @@ void SlamNode::process(const PendingScan& pending, const Pose2& odometry, const 
                                                  params_.ellipse_probability));
   }
   publishLandmarkMap(map_header);
-  std_msgs::Header laser_header = pending.message->header;
+  std_msgs::Header laser_header = pending.header;
   association_publisher_.publish(
       toAssociationReport(result.observations, result.iteration, laser_header));
 }
@@ -624,6 +671,14 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     }
   }
   smoothed_path_publisher_.publish(path);
+  if (stored_scans_.empty()) {
+    // input: features: the node never saw the ranges a grid is cast from.
+    response.success = true;
+    response.message = "smoothed " + std::to_string(smoothed.size()) +
+                       " scan poses; no occupancy grid (input is features: no scans stored)";
+    ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
+    return true;
+  }
 
   nav_msgs::OccupancyGrid map;
   map.header = header;

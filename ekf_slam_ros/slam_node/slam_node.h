@@ -8,6 +8,10 @@
 //          scan's stamp (at most tf_timeout, then dropped and logged)
 //        → SlamPipeline::processScan(scan, odometry)
 //        → tf map→odom, pose, path, landmarks, landmark_map, association.
+// With input: features the node takes ekf_slam/Features (feature_node's
+// output, stamped and framed as the scan) instead: checks (known kinds,
+// finite values, positive-definite covariances, stamp order) → the same
+// queue → SlamPipeline::processFeatures → the same outputs.
 // Nothing is written back into the robot (thesis §3.4.2): the map frame
 // is a separate estimate published as map → odom (REP-105).
 // Every output is stamped with the scan's stamp (data time), so bag replay
@@ -16,6 +20,7 @@
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <ekf_slam/Features.h>
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
 #include <nav_msgs/Path.h>
@@ -49,6 +54,7 @@ enum class DropReason {
   kLaserTransformMissing,  // base_link → laser not available at the stamp within tf_timeout
   kQueueOverflow,          // more scans waiting for tf than scan_queue_size
   kPaused,                 // the pause service was called
+  kBadFeatures,            // a features message with unknown kinds or unusable values
 };
 const char* toString(DropReason reason);
 
@@ -59,19 +65,26 @@ class SlamNode {
            const SlamConfig& config);
 
  private:
-  struct PendingScan {
-    sensor_msgs::LaserScan::ConstPtr message;
-    Scan scan;
+  // One input waiting for its transforms: a scan, or features extracted
+  // from one (input: features), with the scan's header.
+  struct PendingInput {
+    std_msgs::Header header;
+    std::optional<Scan> scan;
+    std::optional<FeatureSet> features;
     ros::Time received;  // for the tf wait (clock time: data or sim)
   };
 
   void onScan(const sensor_msgs::LaserScan::ConstPtr& message);
+  void onFeatures(const Features::ConstPtr& message);
+  // Common to both inputs: the clock and pause checks (false: dropped).
+  bool acceptingInput();
+  void enqueue(PendingInput pending);
   void drainQueue();
   // The transform target → source at `stamp`; false with a description of
   // what is missing (frames, how late) in `why`.
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
               Pose2* pose, std::string* why) const;
-  void process(const PendingScan& pending, const Pose2& odometry, const Pose2& laser);
+  void process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser);
   void drop(DropReason reason, const std::string& detail);
 
   void createPipeline(const Pose2& laser_pose);
@@ -97,7 +110,7 @@ class SlamNode {
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
 
-  ros::Subscriber scan_subscriber_;
+  ros::Subscriber input_subscriber_;
   ros::Publisher pose_publisher_, path_publisher_, landmarks_publisher_, landmark_map_publisher_,
       association_publisher_, smoothed_path_publisher_, map_publisher_, odometry_path_publisher_;
   std::vector<ros::ServiceServer> services_;
@@ -111,9 +124,9 @@ class SlamNode {
   std::optional<LandmarkMapFile> seed_map_;  // a loaded map waiting for the pipeline
   bool localize_only_ = false;
   bool paused_ = false;
-  std::deque<PendingScan> queue_;
+  std::deque<PendingInput> queue_;
   std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
-  std::vector<Scan> stored_scans_;                // one per pipeline record, for the map
+  std::vector<Scan> stored_scans_;  // one per pipeline record, for the map (input: scan)
   nav_msgs::Path path_;
   // The robot's own odometry drawn in the map frame, tied to the SLAM pose at
   // the first scan: where the robot would believe it is without SLAM.
@@ -128,6 +141,11 @@ class SlamNode {
 
   // Diagnostics.
   std::map<DropReason, long> drops_;
+  struct DropLog {
+    ros::WallTime time;   // of the last line logged for the reason
+    long suppressed = 0;  // drops not logged since
+  };
+  std::map<DropReason, DropLog> last_drop_log_;
   long scans_received_ = 0;
   long iterations_at_last_diagnostic_ = 0;
   ros::WallTime last_diagnostic_time_;

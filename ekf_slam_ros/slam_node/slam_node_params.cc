@@ -11,6 +11,11 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
   read.text("odom_frame", &p->odom_frame, /*required=*/true);
   read.text("base_frame", &p->base_frame, /*required=*/true);
   read.text("scan_topic", &p->scan_topic, /*required=*/true);
+  read.text("input", &p->input, /*required=*/true);
+  read.text("features_topic", &p->features_topic, /*required=*/true);
+  if (p->input != "scan" && p->input != "features") {
+    read.fail("input", "must be 'scan' or 'features', not '" + p->input + "'");
+  }
   read.number("tf_timeout", &p->tf_timeout, 0.0, 60.0);
   read.integer("scan_queue_size", &p->scan_queue_size, 1, 10000);
   read.number("transform_tolerance", &p->transform_tolerance, 0.0, 10.0);

@@ -18,6 +18,11 @@ struct SlamNodeParams {
   std::string odom_frame = "odom";
   std::string base_frame = "base_link";
   std::string scan_topic = "scan";
+  // "scan": LaserScans in, features extracted inside the node. "features":
+  // ekf_slam/Features from feature_node (or any other extractor) in; needs
+  // scan_matching.enabled false, and ~smooth then has no scans for a grid.
+  std::string input = "scan";
+  std::string features_topic = "features";
   double tf_timeout = 0.3;             // s a scan may wait for its transforms
   int scan_queue_size = 30;            // scans waiting for tf at most (oldest dropped)
   double transform_tolerance = 0.1;    // s map→odom is future-dated by

@@ -519,6 +519,68 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   EXPECT_GT(free_cells, occupied) << "the room's inside";
 }
 
+// input: features (slam_node_features_input.test): ekf_slam_node maps from
+// feature_node's messages; corrupt ones are refused, counted and named, and
+// the map stays as it was; ~smooth has no scans for a grid and says so.
+TEST_F(SlamNodeTest, FeaturesInputMapsAndRefusesCorruptFeatures) {
+  ros::NodeHandle node;
+  ros::Publisher features_out = node.advertise<ekf_slam::Features>("features", 10);
+  ASSERT_TRUE(waitFor([&] { return features_out.getNumSubscribers() > 0; }, 5.0))
+      << "ekf_slam_node does not subscribe to features (input: features)";
+  // Mapping from features alone: the map is growing (SetUp saw >= 3 landmarks).
+  ASSERT_TRUE(freshDiagnostics());
+  const double iterations_start = observer_.diagnostic("iterations");
+  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations_start; }, 5.0));
+
+  robot_.publish_scans = false;  // feature_node falls silent too
+  ros::WallDuration(1.0).sleep();
+  ASSERT_TRUE(freshDiagnostics());
+  const ekf_slam::LandmarkMap before = observer_.map();
+  const long maps_before = observer_.maps();
+  const double bad_before = observer_.diagnostic("dropped: bad features");
+  const double iterations_before = observer_.diagnostic("iterations");
+  ASSERT_FALSE(std::isnan(bad_before));
+
+  ekf_slam::Features good = observer_.features();
+  int candidate = -1;
+  for (size_t i = 0; i < good.points.size(); ++i) {
+    if (good.points[i].landmark_candidate) candidate = static_cast<int>(i);
+  }
+  ASSERT_GE(candidate, 0) << "feature_node's last message has no landmark candidate";
+  // 1. A NaN in a candidate's covariance; 2. an unknown point kind. Both
+  // fresh stamps, so only their content can be refused.
+  ekf_slam::Features nan_covariance = good;
+  nan_covariance.header.stamp = ros::Time::now();
+  nan_covariance.points[candidate].range_bearing_covariance[3] =
+      std::numeric_limits<double>::quiet_NaN();
+  features_out.publish(nan_covariance);
+  ros::WallDuration(2.2).sleep();  // past the node's per-reason log throttle (2 s)
+  ekf_slam::Features unknown_kind = good;
+  unknown_kind.header.stamp = ros::Time::now();
+  unknown_kind.points[candidate].kind = "blob";
+  features_out.publish(unknown_kind);
+  ros::WallDuration(1.0).sleep();
+
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_EQ(observer_.diagnostic("dropped: bad features"), bad_before + 2);
+  EXPECT_EQ(observer_.diagnostic("iterations"), iterations_before);
+  EXPECT_TRUE(observer_.logged("bad features", "covariance is not finite"));
+  EXPECT_TRUE(observer_.logged("bad features", "unknown kind 'blob'"));
+  EXPECT_EQ(observer_.maps(), maps_before);
+  EXPECT_TRUE(sameLandmarks(observer_.map(), before));
+
+  robot_.publish_scans = true;
+  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations_before; }, 5.0));
+  EXPECT_GT(observer_.maps(), maps_before);
+
+  std_srvs::Trigger smooth;
+  ASSERT_TRUE(call("smooth", &smooth));
+  EXPECT_TRUE(smooth.response.success) << smooth.response.message;
+  EXPECT_NE(smooth.response.message.find("no occupancy grid"), std::string::npos)
+      << smooth.response.message;
+  EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() > 10; }, 3.0));
+}
+
 }  // namespace
 }  // namespace ekf_slam
 
