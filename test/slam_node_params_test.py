@@ -1,5 +1,8 @@
 #!/usr/bin/python3
-"""ekf_slam_node and feature_node refuse bad parameters at start-up.
+"""The nodes refuse bad parameters at start-up.
+
+ekf_slam_node and feature_node, and the two drivers (p3dx_driver_node,
+lms200_node), which share the same parameter reader.
 
 Each case starts the node with one bad private parameter (or a bad
 configuration file) against the rostest roscore and asserts that it exits
@@ -70,6 +73,18 @@ class BadParameters(unittest.TestCase):
     def test_unreadable_initial_map_is_reported(self):
         self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",
                    "_initial_map:=/nonexistent/landmarks.yaml")
+
+    # The drivers read their parameters with the same reader: a wrong type
+    # is an error, not a silent default.
+    def test_lms200_node_wrong_type_names_the_key(self):
+        self.check("lms200_node", "baud", "_baud:=fast", "_port:=/dev/null")
+
+    def test_lms200_node_unknown_key(self):
+        self.check("lms200_node", "time_ofset", "_time_ofset:=0.1", "_port:=/dev/null")
+
+    def test_p3dx_driver_out_of_range_names_the_key(self):
+        self.check("p3dx_driver_node", "max_linear_velocity", "_max_linear_velocity:=5.0",
+                   "_port:=/dev/null")
 
     def test_feature_node_unknown_key(self):
         self.check("feature_node", "scan_topc", "_scan_topc:=scan")

@@ -1,6 +1,6 @@
 #include "ekf_slam_ros/simulator/simulator_params.h"
 
-#include "ekf_slam_ros/params/private_params.h"
+#include "ros_params/private_params.h"
 
 namespace ekf_slam {
 namespace sim {

@@ -1,6 +1,6 @@
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 
-#include "ekf_slam_ros/params/private_params.h"
+#include "ros_params/private_params.h"
 
 namespace ekf_slam {
 

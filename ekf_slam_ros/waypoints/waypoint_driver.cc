@@ -23,9 +23,9 @@
 #include <memory>
 #include <string>
 
-#include "ekf_slam_ros/params/private_params.h"
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
 #include "ekf_slam_ros/waypoints/waypoint_file.h"
+#include "ros_params/private_params.h"
 
 namespace {
 

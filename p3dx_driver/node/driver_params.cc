@@ -1,80 +1,16 @@
 #include "p3dx_driver/node/driver_params.h"
 
-#include <cmath>
-#include <set>
-#include <sstream>
-
+#include "ros_params/private_params.h"
 #include "serial_io/serial_port.h"
 
 namespace p3dx {
-namespace {
-
-class Loader {
- public:
-  Loader(const ros::NodeHandle& node, std::string* error) : node_(node), error_(error) {}
-
-  // Reads `key` if set; rejects values outside [low, high].
-  void number(const std::string& key, double* value, double low, double high) {
-    known_.insert(key);
-    if (!node_.getParam(key, *value) && node_.hasParam(key)) {
-      int integer = 0;
-      if (node_.getParam(key, integer)) {
-        *value = integer;
-      } else {
-        fail(key, "must be a number");
-      }
-    }
-    if (!std::isfinite(*value) || *value < low || *value > high) {
-      std::ostringstream text;
-      text << "is " << *value << ", allowed [" << low << ", " << high << "]";
-      fail(key, text.str());
-    }
-  }
-  void integer(const std::string& key, int* value, int low, int high) {
-    double number_value = *value;
-    this->number(key, &number_value, low, high);
-    *value = static_cast<int>(number_value);
-  }
-  void flag(const std::string& key, bool* value) {
-    known_.insert(key);
-    if (!node_.getParam(key, *value) && node_.hasParam(key)) fail(key, "must be true or false");
-  }
-  void text(const std::string& key, std::string* value) {
-    known_.insert(key);
-    if (!node_.getParam(key, *value) && node_.hasParam(key)) fail(key, "must be a string");
-    if (value->empty()) fail(key, "must not be empty");
-  }
-  void fail(const std::string& key, const std::string& why) {
-    if (error_->empty()) *error_ = "parameter " + node_.resolveName(key) + " " + why;
-  }
-  // Flags private parameters this node does not know (typos).
-  void rejectUnknown() {
-    std::vector<std::string> names;
-    node_.getParamNames(names);
-    const std::string prefix = node_.getNamespace() + "/";
-    for (const std::string& name : names) {
-      if (name.rfind(prefix, 0) != 0) continue;
-      const std::string key = name.substr(prefix.size());
-      if (key.find('/') != std::string::npos) continue;  // nested: not ours
-      if (!known_.count(key)) fail(key, "is not a parameter of p3dx_driver_node (typo?)");
-    }
-  }
-
- private:
-  const ros::NodeHandle& node_;
-  std::string* error_;
-  std::set<std::string> known_;
-};
-
-}  // namespace
 
 bool loadDriverParams(const ros::NodeHandle& node, DriverParams* params, std::string* error) {
-  error->clear();
-  Loader load(node, error);
+  ekf_slam::PrivateParams load(node);
   LinkOptions& link = params->link;
   load.text("port", &link.port);
   load.integer("baud", &link.baud, 1200, 4000000);
-  if (error->empty() && !serial_io::isStandardBaud(link.baud)) {
+  if (load.ok() && !serial_io::isStandardBaud(link.baud)) {
     load.fail("baud", "is " + std::to_string(link.baud) + ", not a standard serial rate");
   }
   load.flag("probe_baud", &link.probe_baud);
@@ -111,7 +47,8 @@ bool loadDriverParams(const ros::NodeHandle& node, DriverParams* params, std::st
     load.fail("base_frame", "must differ from odom_frame");
   }
   load.rejectUnknown();
-  return error->empty();
+  *error = load.errors();
+  return load.ok();
 }
 
 }  // namespace p3dx

@@ -9,10 +9,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <set>
 #include <string>
 #include <thread>
 
+#include "ros_params/private_params.h"
 #include "sick_lms200_driver/node/laser_scan_conversion.h"
 #include "sick_lms200_driver/protocol/scanner_link.h"
 
@@ -28,57 +28,35 @@ struct NodeOptions {
 };
 
 // Reads the private parameters; false (with a message naming the key) when
-// one is unknown or out of range.
+// one is unknown, of the wrong type or out of range.
 bool loadOptions(const ros::NodeHandle& pnh, NodeOptions* options, std::string* error) {
-  static const std::set<std::string> kKnown{
-      "port",     "baud",        "angle",    "resolution",      "units",
-      "frame_id", "time_offset", "inverted", "reconnect_delay", "data_timeout"};
-  std::vector<std::string> names;
-  ros::param::getParamNames(names);
-  const std::string prefix = pnh.getNamespace() + "/";
-  for (const std::string& name : names) {
-    if (name.rfind(prefix, 0) != 0) continue;
-    const std::string key = name.substr(prefix.size());
-    if (!kKnown.count(key)) {
-      *error = "unknown parameter '" + name + "' (known: port, baud, angle, resolution, units, " +
-               "frame_id, time_offset, inverted, reconnect_delay, data_timeout)";
-      return false;
-    }
-  }
+  ekf_slam::PrivateParams read(pnh);
   LinkOptions& link = options->link;
-  pnh.param("port", link.port, link.port);
-  pnh.param("baud", link.session.baud, link.session.baud);
-  pnh.param("angle", link.session.angle_deg, link.session.angle_deg);
+  read.text("port", &link.port);
+  read.integer("baud", &link.session.baud, 1200, 500000);
+  read.integer("angle", &link.session.angle_deg, 100, 180);
   double resolution = link.session.resolution_centideg / 100.0;
-  pnh.param("resolution", resolution, resolution);
+  read.number("resolution", &resolution, 0.25, 1.0);
   link.session.resolution_centideg = static_cast<int>(std::lround(resolution * 100.0));
   if (std::abs(resolution * 100.0 - link.session.resolution_centideg) > 1e-6) {
-    *error = "resolution: " + std::to_string(resolution) + " must be 1.0, 0.5 or 0.25 (degrees)";
-    return false;
+    read.fail("resolution",
+              "must be 1.0, 0.5 or 0.25 (degrees), got " + std::to_string(resolution));
   }
   std::string units = "mm";
-  pnh.param("units", units, units);
+  read.text("units", &units);
   if (units != "mm" && units != "cm") {
-    *error = "units: '" + units + "' must be mm (8.18 m range) or cm (81.8 m range)";
-    return false;
+    read.fail("units", "must be mm (8.18 m range) or cm (81.8 m range), got '" + units + "'");
   }
   link.session.units =
       units == "mm" ? sick_lms200::Units::kMillimetres : sick_lms200::Units::kCentimetres;
-  pnh.param("frame_id", options->message.frame_id, options->message.frame_id);
-  pnh.param("time_offset", link.time_offset, link.time_offset);
-  pnh.param("inverted", options->message.inverted, options->message.inverted);
-  pnh.param("reconnect_delay", link.reconnect_delay, link.reconnect_delay);
-  pnh.param("data_timeout", link.data_timeout, link.data_timeout);
-  if (!std::isfinite(link.time_offset) || std::abs(link.time_offset) > 1.0) {
-    *error = "time_offset: " + std::to_string(link.time_offset) + " s must be within [-1, 1]";
-    return false;
-  }
-  if (!(link.reconnect_delay > 0.0) || !(link.data_timeout > 0.0)) {
-    *error = "reconnect_delay and data_timeout must be positive (s)";
-    return false;
-  }
-  if (options->message.frame_id.empty()) {
-    *error = "frame_id must not be empty";
+  read.text("frame_id", &options->message.frame_id);
+  read.number("time_offset", &link.time_offset, -1.0, 1.0);
+  read.flag("inverted", &options->message.inverted);
+  read.number("reconnect_delay", &link.reconnect_delay, 0.01, 60.0);
+  read.number("data_timeout", &link.data_timeout, 0.01, 60.0);
+  read.rejectUnknown();
+  if (!read.ok()) {
+    *error = read.errors();
     return false;
   }
   *error = sick_lms200::validateSessionOptions(link.session);

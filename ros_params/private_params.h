@@ -3,7 +3,7 @@
 // (typos) rejected, and every message naming the full parameter, e.g.
 //   "/simulator/robot_radius: must be in [0.05, 1], got 3".
 // Keys that are not set keep the struct's default. Used by simulator_node,
-// waypoint_driver, ekf_slam_node and feature_node.
+// waypoint_driver, ekf_slam_node, feature_node, p3dx_driver_node and lms200_node.
 #pragma once
 
 #include <ros/node_handle.h>

@@ -1,4 +1,4 @@
-#include "ekf_slam_ros/params/private_params.h"
+#include "ros_params/private_params.h"
 
 #include <cmath>
 #include <sstream>
