@@ -69,6 +69,7 @@ class PoseGraph {
   void setPose(int node, const Pose2& pose) { poses_[node] = pose; }
   const std::vector<PoseGraphEdge>& edges() const { return edges_; }
   void setEdgeActive(int edge, bool active) { edges_[edge].active = active; }
+  void setEdgeRobust(int edge, bool robust) { edges_[edge].robust = robust; }
 
   // Squared Mahalanobis error eᵀ Ω e of an edge at the current poses.
   double edgeChi2(int edge) const;
