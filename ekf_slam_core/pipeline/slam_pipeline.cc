@@ -42,6 +42,8 @@ std::string PipelineOptions::validate() const {
   if (!error.empty()) return "scan_matching: " + error;
   error = scan_matched_motion_noise.validate();
   if (!error.empty()) return "scan_matching.motion_noise: " + error;
+  error = loop_closure.validate();
+  if (!error.empty()) return "loop_closure: " + error;
   return "";
 }
 
@@ -69,6 +71,9 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       scan_matcher_(options.scan_matching.enabled
                         ? std::make_unique<ScanMatchingOdometry>(options.scan_matching)
                         : nullptr),
+      loop_closer_(options.loop_closure.enabled
+                       ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
+                       : nullptr),
       filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {}
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
@@ -87,7 +92,11 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
   Pose2 odometry = raw_odometry;
   current_raw_odometry_ = raw_odometry;
   ScanResult out;
+  bool usable = false;
   auto record = [&]() {
+    if (loop_closer_) {
+      loop_closer_->addScan(scan.stamp, scan, options_.filter.laser_pose, odometry, usable);
+    }
     ScanRecord r;
     r.stamp = scan.stamp;
     r.filtered = out.pose;
@@ -98,7 +107,7 @@ ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& raw_odometry
   };
 
   const std::string scan_error = validateScan(scan);
-  const bool usable = odometry.allFinite() && scan_error.empty() && std::isfinite(scan.stamp);
+  usable = odometry.allFinite() && scan_error.empty() && std::isfinite(scan.stamp);
   if (scan_matcher_ && odometry.allFinite()) {
     if (usable) {
       MatchResult match;
@@ -243,6 +252,14 @@ std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) out.push_back({r.stamp, r.filtered});
   return out;
+}
+
+void SlamPipeline::finishLoopClosure() {
+  if (loop_closer_) loop_closer_->finish();
+}
+
+std::vector<StampedPose> SlamPipeline::optimizedScanPoses() const {
+  return loop_closer_ ? loop_closer_->scanPoses() : std::vector<StampedPose>();
 }
 
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses() const {
