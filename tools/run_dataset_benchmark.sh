@@ -37,7 +37,7 @@ for name in ${DATASETS:-intel aces}; do
   proc=$(sed -n 's/^processing: \([0-9.]*\) s.*/\1/p' "$dir/report.txt")
   # scan_matched: the laser front end's own track (the filter's control),
   # written only when scan matching is on.
-  for traj in odometry scan_matched filtered smoothed; do
+  for traj in odometry scan_matched filtered smoothed optimized; do
     [ -f "$dir/trajectory_$traj.txt" ] || continue
     result=$("$bin/evaluate_relations" --relations "$rel" --trajectory "$dir/trajectory_$traj.txt" --label "$name $traj")
     echo "$result"

@@ -42,6 +42,8 @@ std::string PipelineOptions::validate() const {
   if (!error.empty()) return "scan_matching: " + error;
   error = scan_matched_motion_noise.validate();
   if (!error.empty()) return "scan_matching.motion_noise: " + error;
+  error = loop_closure.validate();
+  if (!error.empty()) return "loop_closure: " + error;
   return "";
 }
 
@@ -69,6 +71,9 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       scan_matcher_(options.scan_matching.enabled
                         ? std::make_unique<ScanMatchingOdometry>(options.scan_matching)
                         : nullptr),
+      loop_closer_(options.loop_closure.enabled
+                       ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
+                       : nullptr),
       filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {}
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
@@ -97,7 +102,11 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   Pose2 odometry = raw_odometry;
   current_raw_odometry_ = raw_odometry;
   ScanResult out;
+  bool usable = false;
   auto record = [&]() {
+    if (loop_closer_ && scan != nullptr) {
+      loop_closer_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
+    }
     ScanRecord r;
     r.stamp = stamp;
     r.filtered = out.pose;
@@ -112,10 +121,12 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     input_error = validateScan(*scan);
   } else if (scan_matcher_) {
     input_error = "features given without their scan, but scan matching (enabled) needs the scan";
+  } else if (loop_closer_) {
+    input_error = "features given without their scan, but loop closure (enabled) needs the scan";
   } else {
     input_error = validateFeatureSet(*features);
   }
-  const bool usable = odometry.allFinite() && input_error.empty() && std::isfinite(stamp);
+  usable = odometry.allFinite() && input_error.empty() && std::isfinite(stamp);
   if (scan_matcher_ && odometry.allFinite()) {
     if (usable) {
       MatchResult match;
@@ -260,6 +271,14 @@ std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) out.push_back({r.stamp, r.filtered});
   return out;
+}
+
+void SlamPipeline::finishLoopClosure() {
+  if (loop_closer_) loop_closer_->finish();
+}
+
+std::vector<StampedPose> SlamPipeline::optimizedScanPoses() const {
+  return loop_closer_ ? loop_closer_->scanPoses() : std::vector<StampedPose>();
 }
 
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses() const {

@@ -27,6 +27,7 @@
 #include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_core/features/extract_features.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
@@ -54,6 +55,9 @@ struct PipelineOptions {
   // (the thesis's mode).
   ScanMatcherOptions scan_matching;
   MotionNoiseOptions scan_matched_motion_noise = defaultScanMatchedMotionNoise();
+  // Loop-closing back end (pose graph over key scans) fed with the control
+  // source's poses; its trajectory is optimizedScanPoses().
+  LoopClosureOptions loop_closure;
 
   // Noise of a scan-matched increment: a few millimetres and a tenth of a
   // degree per step, growing slowly with the motion (docs/offline.md).
@@ -143,6 +147,13 @@ class SlamPipeline {
   std::vector<StampedPose> smoothedScanPoses() const;
   std::vector<StampedPose> filteredScanPoses() const;
 
+  // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
+  // the final optimisation after the last scan; optimizedScanPoses() then
+  // gives one pose per scan (empty when loop closure is off).
+  void finishLoopClosure();
+  std::vector<StampedPose> optimizedScanPoses() const;
+  const LoopCloser* loopCloser() const { return loop_closer_.get(); }
+
  private:
   // One input: a scan (features extracted here) or features extracted
   // elsewhere; exactly one of the two is non-null.
@@ -155,6 +166,7 @@ class SlamPipeline {
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
+  std::unique_ptr<LoopCloser> loop_closer_;             // null when disabled
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   PipelineCounters counters_;

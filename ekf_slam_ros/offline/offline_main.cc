@@ -110,6 +110,19 @@ std::string writeLandmarks(const std::string& path, const ekf_slam::EkfSlam& fil
   return out ? "" : path + ": write error";
 }
 
+std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
+  if (!closer) return "off";
+  const ekf_slam::LoopClosureCounters& c = closer->counters();
+  std::ostringstream line;
+  line.setf(std::ios::fixed);
+  line.precision(3);
+  line << c.key_scans << " key scans, " << c.candidates << " candidates verified, " << c.accepted
+       << " loops accepted (" << c.dropped << " dropped by the kernel at the end), "
+       << c.optimisations << " optimisations; verification " << c.verification_seconds
+       << " s, optimisation " << c.optimisation_seconds << " s";
+  return line.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -197,6 +210,7 @@ int main(int argc, char** argv) {
     }
   }
   if (tty) std::fprintf(stderr, "\n");
+  pipeline.finishLoopClosure();
 
   // Trajectories, one line per scan with its header stamp.
   const std::vector<ekf_slam::StampedPose> filtered = pipeline.filteredScanPoses();
@@ -214,13 +228,20 @@ int main(int argc, char** argv) {
     for (const ekf_slam::ScanRecord& r : pipeline.scans()) matched.push_back({r.stamp, r.odometry});
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_scan_matched.txt", matched);
   }
+  // The loop-closed trajectory (pose graph over key scans), when on.
+  const std::vector<ekf_slam::StampedPose> optimized = pipeline.optimizedScanPoses();
+  if (error.empty() && !optimized.empty()) {
+    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_optimized.txt", optimized);
+  }
+  // The final trajectory: loop-closed when loop closure is on, else smoothed.
+  const std::vector<ekf_slam::StampedPose>& final_poses = optimized.empty() ? smoothed : optimized;
   if (error.empty()) error = writeLandmarks(out_dir + "/landmarks.yaml", pipeline.filter());
   if (error.empty()) {
-    error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, smoothed,
+    error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, final_poses,
                                 config.pipeline.filter.laser_pose);
   }
   const Pose2 laser = config.pipeline.filter.laser_pose;
-  if (error.empty()) error = buildMap(config.map, log, smoothed, laser).save(out_dir + "/map");
+  if (error.empty()) error = buildMap(config.map, log, final_poses, laser).save(out_dir + "/map");
   if (error.empty()) {
     error = buildMap(config.map, log, filtered, laser).save(out_dir + "/map_filtered");
   }
@@ -272,6 +293,7 @@ int main(int argc, char** argv) {
                        " fell back to the odometry increment"
                  : std::string("off (raw odometry is the control)"))
          << "\n"
+         << "loop closure: " << loopClosureLine(pipeline.loopCloser()) << "\n"
          << "observations (landmark candidates): " << c.observations << " ("
          << (c.iterations ? static_cast<double>(c.observations) / c.iterations : 0.0)
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous

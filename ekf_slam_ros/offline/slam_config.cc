@@ -87,6 +87,50 @@ void bindScanMatching(YamlBinder b, PipelineOptions* p) {
   b.rejectUnknownKeys();
 }
 
+void bindLoopClosure(YamlBinder b, LoopClosureOptions* l) {
+  b.boolean("enabled", &l->enabled);
+  b.number("keyscan_distance", &l->keyscan_distance, 1e-3, kHuge);
+  b.number("keyscan_angle", &l->keyscan_angle, 1e-3, 2 * kPi);
+  b.number("max_range", &l->max_range, 1e-3, kHuge);
+  b.number("step_sigma_translation", &l->step_sigma_translation, 1e-6, 10.0);
+  b.number("translation_sigma_per_sqrt_metre", &l->translation_sigma_per_sqrt_metre, 0.0, 10.0);
+  b.number("step_sigma_rotation", &l->step_sigma_rotation, 1e-6, kPi);
+  b.number("rotation_sigma_per_sqrt_metre", &l->rotation_sigma_per_sqrt_metre, 0.0, kPi);
+  b.number("rotation_sigma_per_sqrt_radian", &l->rotation_sigma_per_sqrt_radian, 0.0, kPi);
+  b.number("min_loop_travel", &l->min_loop_travel, 0.0, kHuge);
+  b.number("search_radius_min", &l->search_radius_min, 1e-3, 1000.0);
+  b.number("search_radius_per_metre", &l->search_radius_per_metre, 0.0, 10.0);
+  b.number("search_radius_max", &l->search_radius_max, 1e-3, 1000.0);
+  b.number("search_angle_min", &l->search_angle_min, 1e-4, kPi);
+  b.number("search_angle_per_metre", &l->search_angle_per_metre, 0.0, kPi);
+  b.number("search_angle_max", &l->search_angle_max, 1e-4, kPi);
+  b.number("max_heading_difference", &l->max_heading_difference, 1e-3, kPi);
+  b.integer("submap_half_width", &l->submap_half_width, 0, 1000);
+  b.integer("retry_interval", &l->retry_interval, 0, 100000);
+  YamlBinder c = b.child("correlative");
+  c.number("resolution", &l->correlative.resolution, 1e-3, 10.0);
+  c.number("sigma", &l->correlative.sigma, 1e-3, 10.0);
+  c.integer("coarse_factor", &l->correlative.coarse_factor, 1, 64);
+  c.number("angular_step", &l->correlative.angular_step, 1e-4, 0.5);
+  c.rejectUnknownKeys();
+  b.number("search_point_spacing", &l->search_point_spacing, 0.0, 10.0);
+  b.number("min_score", &l->min_score, 1e-3, 1.0);
+  b.number("min_inlier_fraction", &l->min_inlier_fraction, 0.0, 1.0);
+  b.number("max_rms_residual", &l->max_rms_residual, 1e-6, 10.0);
+  b.number("max_degenerate_sigma", &l->max_degenerate_sigma, 1e-6, 100.0);
+  b.number("max_icp_shift", &l->max_icp_shift, 1e-6, 100.0);
+  b.number("loop_sigma_translation", &l->loop_sigma_translation, 1e-6, 100.0);
+  b.number("loop_sigma_rotation", &l->loop_sigma_rotation, 1e-6, kPi);
+  b.number("min_final_weight", &l->min_final_weight, 0.0, 1.0);
+  YamlBinder o = b.child("optimizer");
+  o.integer("max_iterations", &l->optimizer.max_iterations, 1, 10000);
+  o.number("convergence_step", &l->optimizer.convergence_step, 1e-12, 1.0);
+  o.number("robust_kernel_width", &l->optimizer.robust_kernel_width, 1e-3, 1000.0);
+  o.number("initial_lambda", &l->optimizer.initial_lambda, 0.0, 1e6);
+  o.rejectUnknownKeys();
+  b.rejectUnknownKeys();
+}
+
 void bindAssociation(YamlBinder b, AssociationOptions* a) {
   std::string method = a->method == AssociationMethod::kJointCompatibility ? "jcbb" : "nn";
   b.text("method", &method, {"nn", "jcbb"});
@@ -147,6 +191,7 @@ std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
   bindAssociation(top.child("association"), &c.pipeline.association);
   bindPipeline(top.child("pipeline"), &c.pipeline);
   bindScanMatching(top.child("scan_matching"), &c.pipeline);
+  bindLoopClosure(top.child("loop_closure"), &c.pipeline.loop_closure);
   bindMap(top.child("map"), &c.map);
   bindInput(top.child("input"), &c.input);
   top.rejectUnknownKeys();

@@ -25,11 +25,14 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  if (params.input == "features" && config.pipeline.scan_matching.enabled) {
+  if (params.input == "features" &&
+      (config.pipeline.scan_matching.enabled || config.pipeline.loop_closure.enabled)) {
+    const char* key =
+        config.pipeline.scan_matching.enabled ? "scan_matching.enabled" : "loop_closure.enabled";
     ROS_FATAL(
-        "ekf_slam_node: input is 'features' but scan_matching.enabled is true in %s; the scan "
-        "matcher aligns raw scans: set scan_matching.enabled: false there or use input: scan",
-        params.config_file.empty() ? "the built-in defaults" : params.config_file.c_str());
+        "ekf_slam_node: input is 'features' but %s is true in %s; it needs the raw scans: set it "
+        "false there or use input: scan",
+        key, params.config_file.empty() ? "the built-in defaults" : params.config_file.c_str());
     return 1;
   }
   try {

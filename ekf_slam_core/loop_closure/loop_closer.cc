@@ -1,0 +1,319 @@
+#include "ekf_slam_core/loop_closure/loop_closer.h"
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+namespace ekf_slam {
+
+std::string LoopClosureOptions::validate() const {
+  if (!(keyscan_distance > 0.0)) return "keyscan_distance must be > 0 (m)";
+  if (!(keyscan_angle > 0.0)) return "keyscan_angle must be > 0 (rad)";
+  if (!(max_range > 0.0)) return "max_range must be > 0 (m)";
+  if (!(step_sigma_translation > 0.0)) return "step_sigma_translation must be > 0 (m)";
+  if (!(step_sigma_rotation > 0.0)) return "step_sigma_rotation must be > 0 (rad)";
+  if (!(translation_sigma_per_sqrt_metre >= 0.0 && rotation_sigma_per_sqrt_metre >= 0.0 &&
+        rotation_sigma_per_sqrt_radian >= 0.0)) {
+    return "the *_per_sqrt_* noise terms must be >= 0";
+  }
+  if (!(min_loop_travel >= 0.0)) return "min_loop_travel must be >= 0 (m)";
+  if (!(search_radius_min > 0.0)) return "search_radius_min must be > 0 (m)";
+  if (!(search_radius_max >= search_radius_min)) {
+    return "search_radius_max must be >= search_radius_min (m)";
+  }
+  if (!(search_radius_per_metre >= 0.0)) return "search_radius_per_metre must be >= 0";
+  if (!(search_angle_min > 0.0)) return "search_angle_min must be > 0 (rad)";
+  if (!(search_angle_max >= search_angle_min)) {
+    return "search_angle_max must be >= search_angle_min (rad)";
+  }
+  if (!(search_angle_per_metre >= 0.0)) return "search_angle_per_metre must be >= 0";
+  if (!(max_heading_difference > 0.0)) return "max_heading_difference must be > 0 (rad)";
+  if (submap_half_width < 0) return "submap_half_width must be >= 0";
+  if (retry_interval < 0) return "retry_interval must be >= 0";
+  std::string error = correlative.validate();
+  if (!error.empty()) return "correlative: " + error;
+  if (!(search_point_spacing >= 0.0)) return "search_point_spacing must be >= 0 (m)";
+  if (!(min_score > 0.0 && min_score <= 1.0)) return "min_score must be in (0, 1]";
+  if (!(min_inlier_fraction >= 0.0 && min_inlier_fraction <= 1.0)) {
+    return "min_inlier_fraction must be in [0, 1]";
+  }
+  if (!(max_rms_residual > 0.0)) return "max_rms_residual must be > 0 (m)";
+  if (!(max_degenerate_sigma > 0.0)) return "max_degenerate_sigma must be > 0 (m)";
+  if (!(max_icp_shift > 0.0)) return "max_icp_shift must be > 0 (m)";
+  if (!(loop_sigma_translation > 0.0)) return "loop_sigma_translation must be > 0 (m)";
+  if (!(loop_sigma_rotation > 0.0)) return "loop_sigma_rotation must be > 0 (rad)";
+  if (!(min_final_weight >= 0.0 && min_final_weight <= 1.0)) {
+    return "min_final_weight must be in [0, 1]";
+  }
+  error = optimizer.validate();
+  if (!error.empty()) return "optimizer: " + error;
+  return "";
+}
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<Vector2> thinned(const std::vector<Vector2>& points, double spacing) {
+  std::vector<Vector2> out;
+  for (const Vector2& p : points) {
+    if (out.empty() || (p - out.back()).norm() >= spacing) out.push_back(p);
+  }
+  return out;
+}
+
+Matrix3 diagonalInformation(double sigma_translation, double sigma_rotation) {
+  const double it = 1.0 / (sigma_translation * sigma_translation);
+  return Vector3(it, it, 1.0 / (sigma_rotation * sigma_rotation)).asDiagonal();
+}
+
+// Covariance of an ICP pose from its point-to-line pairs at the final pose
+// (the inverse of Σ J Jᵀ / σ_p², the Gauss-Newton information). It is
+// optimistic — the pairs' errors are correlated — but its shape says
+// whether the scan constrains every direction.
+Matrix3 icpCovariance(const std::vector<Vector2>& points, const PointCloudReference& reference,
+                      const Pose2& pose, const ScanMatcherOptions& options) {
+  Matrix3 information = Matrix3::Zero();
+  const Matrix2 R = pose.rotation();
+  for (const Vector2& p : points) {
+    const Vector2 rotated = R * p;
+    const Vector2 q = rotated + pose.translation();
+    const int j = reference.nearest(q, options.correspondence_distance);
+    if (j < 0) continue;
+    const Vector2& n = reference.normals()[j];
+    const Vector3 J(n.x(), n.y(), -n.x() * rotated.y() + n.y() * rotated.x());
+    information += J * J.transpose();
+  }
+  information /= options.point_sigma * options.point_sigma;
+  // A tiny regulariser keeps an unconstrained direction finite (and huge).
+  information += 1e-9 * Matrix3::Identity();
+  return information.inverse();
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher)
+    : options_(options), icp_(matcher) {
+  icp_.max_range = options.max_range;
+  // The loop's pose comes from the correlative search, not from odometry:
+  // the ICP prior only regularises, it must not pull.
+  icp_.prior_sigma_translation = 1.0;
+  icp_.prior_sigma_rotation = 0.5;
+  icp_.initial_correspondence_distance =
+      std::max(icp_.correspondence_distance, 4.0 * options.correlative.resolution);
+}
+
+void LoopCloser::addScan(double stamp, const Scan& scan, const Pose2& laser_pose,
+                         const Pose2& front_end, bool usable) {
+  if (keys_.empty() && usable) {
+    addKeyScan(scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
+  } else if (usable) {
+    const Pose2 since = between(keys_.back().front_end, front_end);
+    if (std::hypot(since.x, since.y) >= options_.keyscan_distance ||
+        std::abs(since.theta) >= options_.keyscan_angle) {
+      addKeyScan(scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
+    }
+  }
+  ScanEntry entry{stamp, static_cast<int>(keys_.size()) - 1, front_end};
+  if (entry.key >= 0) entry.offset = between(keys_[entry.key].front_end, front_end);
+  scans_.push_back(entry);
+}
+
+void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end) {
+  KeyScan key;
+  key.front_end = front_end;
+  key.points = points;
+  key.sparse = thinned(points, options_.search_point_spacing);
+  ++counters_.key_scans;
+  adjacency_.emplace_back();
+  if (keys_.empty()) {
+    graph_.addNode(front_end);
+    keys_.push_back(std::move(key));
+    return;
+  }
+  const int previous = static_cast<int>(keys_.size()) - 1;
+  const Pose2 step = between(keys_[previous].front_end, front_end);
+  const double distance = std::hypot(step.x, step.y);
+  key.travel_from_previous = distance;
+  const int index = graph_.addNode(compose(graph_.pose(previous), step));
+  keys_.push_back(std::move(key));
+
+  // Random walk: variances linear in the distance and the turn.
+  const double var_t = options_.step_sigma_translation * options_.step_sigma_translation +
+                       std::pow(options_.translation_sigma_per_sqrt_metre, 2) * distance;
+  const double var_r = options_.step_sigma_rotation * options_.step_sigma_rotation +
+                       std::pow(options_.rotation_sigma_per_sqrt_metre, 2) * distance +
+                       std::pow(options_.rotation_sigma_per_sqrt_radian, 2) * std::abs(step.theta);
+  PoseGraphEdge edge;
+  edge.from = previous;
+  edge.to = index;
+  edge.measurement = step;
+  edge.information = Vector3(1.0 / var_t, 1.0 / var_t, 1.0 / var_r).asDiagonal();
+  graph_.addEdge(edge);
+  adjacency_[previous].emplace_back(index, distance);
+  adjacency_[index].emplace_back(previous, distance);
+
+  if (!options_.enabled) return;
+  const std::vector<double> distances = graphDistances(index);
+  const int candidate = pickCandidate(index, distances);
+  if (candidate < 0) return;
+  ++counters_.candidates;
+  Pose2 relative;
+  if (!verify(candidate, index, distances[candidate], &relative)) {
+    ++counters_.refused;
+    next_attempt_ = index + options_.retry_interval;
+    return;
+  }
+  ++counters_.accepted;
+  PoseGraphEdge loop;
+  loop.from = candidate;
+  loop.to = index;
+  loop.measurement = relative;
+  loop.information =
+      diagonalInformation(options_.loop_sigma_translation, options_.loop_sigma_rotation);
+  // Enters at full weight (it passed the scan evidence); the kernel judges
+  // it in later optimisations, against the loops that follow.
+  loop.robust = false;
+  const int edge_index = graph_.addEdge(loop);
+  adjacency_[candidate].emplace_back(index, 0.0);
+  adjacency_[index].emplace_back(candidate, 0.0);
+  optimise();
+  graph_.setEdgeRobust(edge_index, true);
+}
+
+// Dijkstra from `from`: travel along sequential edges, zero across loops.
+std::vector<double> LoopCloser::graphDistances(int from) const {
+  std::vector<double> distance(keys_.size(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  distance[from] = 0.0;
+  queue.emplace(0.0, from);
+  while (!queue.empty()) {
+    const auto [d, node] = queue.top();
+    queue.pop();
+    if (d > distance[node]) continue;
+    for (const auto& [next, length] : adjacency_[node]) {
+      if (d + length < distance[next]) {
+        distance[next] = d + length;
+        queue.emplace(distance[next], next);
+      }
+    }
+  }
+  return distance;
+}
+
+double LoopCloser::searchRadius(double graph_distance) const {
+  return std::min(options_.search_radius_max,
+                  options_.search_radius_min + options_.search_radius_per_metre * graph_distance);
+}
+
+double LoopCloser::searchAngle(double graph_distance) const {
+  return std::min(options_.search_angle_max,
+                  options_.search_angle_min + options_.search_angle_per_metre * graph_distance);
+}
+
+int LoopCloser::pickCandidate(int key, const std::vector<double>& distance) const {
+  if (key < next_attempt_) return -1;
+  const Pose2& here = graph_.pose(key);
+  int best = -1;
+  double best_ratio = 1.0;
+  for (int j = 0; j < key; ++j) {
+    if (distance[j] < options_.min_loop_travel) continue;
+    const Pose2& there = graph_.pose(j);
+    if (std::abs(wrapAngle(there.theta - here.theta)) > options_.max_heading_difference) continue;
+    // Closest relative to the window: a near, well-known place first.
+    const double ratio = std::hypot(there.x - here.x, there.y - here.y) / searchRadius(distance[j]);
+    if (ratio <= best_ratio) {
+      best_ratio = ratio;
+      best = j;
+    }
+  }
+  return best;
+}
+
+bool LoopCloser::verify(int candidate, int key, double distance, Pose2* relative) {
+  const auto start = std::chrono::steady_clock::now();
+  struct Timer {
+    double* total;
+    std::chrono::steady_clock::time_point start;
+    ~Timer() { *total += secondsSince(start); }
+  } timer{&counters_.verification_seconds, start};
+
+  // The candidate's neighbourhood in its own frame, from the graph poses
+  // (locally consistent). Recent key scans are left out: matching them
+  // would only repeat the front end.
+  const Pose2& origin = graph_.pose(candidate);
+  const int last = static_cast<int>(keys_.size()) - 1;
+  std::vector<Vector2> submap;
+  for (int m = std::max(0, candidate - options_.submap_half_width);
+       m <= std::min(last, candidate + options_.submap_half_width); ++m) {
+    const Pose2 placement = between(origin, graph_.pose(m));
+    for (const Vector2& p : keys_[m].points) submap.push_back(transformFrom(placement, p));
+  }
+  const KeyScan& query = keys_[key];
+  if (static_cast<int>(query.points.size()) < icp_.min_correspondences) return false;
+
+  const Pose2 guess = between(origin, graph_.pose(key));
+  const LikelihoodGrid grid(submap, options_.correlative);
+  const CorrelativeResult coarse =
+      correlativeSearch(query.sparse, grid, guess, searchRadius(distance), searchAngle(distance),
+                        options_.correlative);
+  if (coarse.score < options_.min_score) return false;
+
+  const PointCloudReference reference(submap, icp_.normal_radius,
+                                      icp_.initial_correspondence_distance);
+  const MatchResult fine = matchPoints(query.points, reference, coarse.pose, icp_);
+  if (!fine.ok || fine.inlier_fraction < options_.min_inlier_fraction ||
+      fine.rms_residual > options_.max_rms_residual) {
+    return false;
+  }
+  const Pose2 shift = between(coarse.pose, fine.pose);
+  if (std::hypot(shift.x, shift.y) > options_.max_icp_shift) return false;
+  // Along a featureless corridor the match slides: refuse it.
+  const Matrix3 covariance = icpCovariance(query.points, reference, fine.pose, icp_);
+  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
+  if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) return false;
+  *relative = fine.pose;
+  return true;
+}
+
+void LoopCloser::optimise() {
+  const auto start = std::chrono::steady_clock::now();
+  graph_.optimize(options_.optimizer);
+  ++counters_.optimisations;
+  counters_.optimisation_seconds += secondsSince(start);
+}
+
+void LoopCloser::finish() {
+  if (counters_.accepted == 0) return;
+  optimise();
+  // Loops the kernel no longer believes are dropped, and the rest re-solved
+  // without them.
+  long dropped = 0;
+  for (int e = 0; e < static_cast<int>(graph_.edges().size()); ++e) {
+    const PoseGraphEdge& edge = graph_.edges()[e];
+    if (!edge.robust || !edge.active) continue;
+    if (graph_.edgeWeight(e, options_.optimizer.robust_kernel_width) < options_.min_final_weight) {
+      graph_.setEdgeActive(e, false);
+      ++dropped;
+    }
+  }
+  counters_.dropped += dropped;
+  if (dropped > 0) optimise();
+}
+
+std::vector<StampedPose> LoopCloser::scanPoses() const {
+  std::vector<StampedPose> out;
+  out.reserve(scans_.size());
+  for (const ScanEntry& s : scans_) {
+    // Before the first key scan there is nothing to hang off: the front end's pose.
+    out.push_back({s.stamp, s.key >= 0 ? compose(graph_.pose(s.key), s.offset) : s.offset});
+  }
+  return out;
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,144 @@
+// Loop-closing back end: a pose graph over key scans, fed with the front
+// end's poses (the scan-matched odometry) and closed by matching the newest
+// key scan against old ones.
+//
+// - Key scans: a scan becomes a key scan after keyscan_distance of travel or
+//   keyscan_angle of turn; its points are kept in the robot frame.
+// - Sequential edges join consecutive key scans with the front end's
+//   relative motion; its covariance grows with the motion (a random walk:
+//   variance linear in the distance and the turn, with a per-step floor).
+// - Loop candidates: old key scans whose graph distance to the new one (the
+//   shortest path through the graph, counting the travel along sequential
+//   edges and nothing across loop edges) is at least min_loop_travel, whose
+//   position lies within a search radius that grows with that distance
+//   (the relative pose's uncertainty grows with the chain that links them),
+//   and whose heading is within max_heading_difference (the LMS200 sees
+//   180°, scans facing away from each other share little).
+// - Verification: the new key scan is searched exhaustively (correlative,
+//   branch and bound) over the whole window against a submap of the
+//   candidate and its neighbours, then refined by point-to-line ICP. A loop
+//   is accepted only when the correlative score, the ICP inlier fraction and
+//   the residual are strong and the match constrains every direction (no
+//   sliding along a corridor).
+// - Optimisation after each accepted loop; the loop edges carry a Cauchy
+//   kernel. A new loop enters at full weight (the scan evidence passed),
+//   and is judged by the kernel against the later ones; at the end loops
+//   whose weight fell below min_final_weight are dropped.
+// - Every scan's pose is its key scan's optimised pose composed with the
+//   front end's increment since that key scan.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/eval/relations.h"
+#include "ekf_slam_core/loop_closure/correlative_matcher.h"
+#include "ekf_slam_core/pose_graph/pose_graph.h"
+#include "ekf_slam_core/scan_matching/scan_matcher.h"
+#include "ekf_slam_core/sensors/scan.h"
+
+namespace ekf_slam {
+
+struct LoopClosureOptions {
+  bool enabled = false;           // config/ekf_slam.yaml turns it on for real logs
+  double keyscan_distance = 0.4;  // m of front-end travel between key scans …
+  double keyscan_angle = 0.35;    // rad … or this much turn (20 deg)
+  double max_range = 15.0;        // m: farther readings are not kept in key scans
+  // Sequential edge noise (1 sigma), a random walk in the motion:
+  double step_sigma_translation = 0.01;            // m per key step (floor)
+  double translation_sigma_per_sqrt_metre = 0.03;  // m per √m driven
+  double step_sigma_rotation = 0.003;              // rad per key step (floor)
+  double rotation_sigma_per_sqrt_metre = 0.01;     // rad per √m driven
+  double rotation_sigma_per_sqrt_radian = 0.02;    // rad per √rad turned
+  // Candidates:
+  double min_loop_travel = 8.0;           // m of graph distance before a key scan may close a loop
+  double search_radius_min = 0.5;         // m: search window at zero graph distance …
+  double search_radius_per_metre = 0.05;  // … growing by this much per m of graph distance …
+  double search_radius_max = 10.0;        // … up to this
+  double search_angle_min = 0.1;          // rad, likewise for the heading window
+  double search_angle_per_metre = 0.005;  // rad per m
+  double search_angle_max = 0.35;         // rad
+  double max_heading_difference = 1.57;   // rad between the two key scans
+  int submap_half_width = 5;              // key scans each side of the candidate in its submap
+  int retry_interval = 3;                 // key scans to wait after a refused candidate
+  // Verification:
+  CorrelativeMatcherOptions correlative;
+  double search_point_spacing = 0.15;  // m: key-scan points thinned for the correlative search
+  double min_score = 0.55;             // mean likelihood of the correlative match
+  double min_inlier_fraction = 0.7;    // of the key scan's points paired by ICP
+  double max_rms_residual = 0.04;      // m, ICP point-to-line
+  double max_degenerate_sigma = 0.03;  // m: 1-sigma of the match along its weakest direction
+  double max_icp_shift = 0.3;          // m: ICP may move the correlative result this far
+  // Loop edge noise (1 sigma) and optimisation:
+  double loop_sigma_translation = 0.05;  // m
+  double loop_sigma_rotation = 0.01;     // rad
+  double min_final_weight = 0.1;  // loops the kernel weighs below this are dropped at the end
+  PoseGraphOptions optimizer;
+
+  std::string validate() const;  // empty when valid, else names the bad field
+};
+
+struct LoopClosureCounters {
+  long key_scans = 0;
+  long candidates = 0;  // verifications attempted
+  long accepted = 0;    // loop edges added
+  long refused = 0;     // failed verification
+  long dropped = 0;     // loop edges the kernel rejected at the end
+  long optimisations = 0;
+  double optimisation_seconds = 0.0;
+  double verification_seconds = 0.0;
+};
+
+class LoopCloser {
+ public:
+  // `matcher` gives the ICP settings (normals, gates, point noise) of the front end.
+  LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher);
+
+  // Every scan, in order, with its front-end pose (odom frame). A scan
+  // without usable geometry (usable = false) never becomes a key scan.
+  void addScan(double stamp, const Scan& scan, const Pose2& laser_pose, const Pose2& front_end,
+               bool usable);
+
+  // Final optimisation: drops the loops the kernel rejects, re-optimises.
+  void finish();
+
+  // One pose per scan given to addScan, in the map frame of the first key scan.
+  std::vector<StampedPose> scanPoses() const;
+
+  const LoopClosureCounters& counters() const { return counters_; }
+  const PoseGraph& graph() const { return graph_; }
+
+ private:
+  struct KeyScan {
+    Pose2 front_end;                    // front-end pose when it was taken
+    std::vector<Vector2> points;        // robot frame
+    std::vector<Vector2> sparse;        // thinned for the correlative search
+    double travel_from_previous = 0.0;  // m
+    int retry_after = 0;                // key index before which it is not tried again
+  };
+  struct ScanEntry {
+    double stamp;
+    int key;       // key scan it hangs off (-1 before the first)
+    Pose2 offset;  // front-end increment from that key scan
+  };
+
+  void addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end);
+  std::vector<double> graphDistances(int from) const;
+  int pickCandidate(int key, const std::vector<double>& distance) const;
+  bool verify(int candidate, int key, double distance, Pose2* relative);
+  double searchRadius(double graph_distance) const;  // m
+  double searchAngle(double graph_distance) const;   // rad
+  void optimise();
+
+  LoopClosureOptions options_;
+  ScanMatcherOptions icp_;
+  PoseGraph graph_;
+  std::vector<KeyScan> keys_;
+  std::vector<ScanEntry> scans_;
+  std::vector<std::vector<std::pair<int, double>>> adjacency_;  // graph distance edges
+  LoopClosureCounters counters_;
+  int next_attempt_ = 0;  // key index before which no loop is tried (after a refusal)
+};
+
+}  // namespace ekf_slam

@@ -1,0 +1,164 @@
+// Loop closure on synthetic scans: ray-cast sweeps of a room with boxes
+// (sim::PolygonWorld), a drifting front end, and known true poses.
+#include "ekf_slam_core/loop_closure/loop_closer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "ekf_slam_core/sim/polygon_world.h"
+
+namespace ekf_slam {
+namespace {
+
+// 20 m × 12 m with boxes of different sizes and angles: structure in every
+// direction, no two places alike.
+sim::PolygonWorld hall() {
+  sim::PolygonWorld world;
+  world.addPolygon({{-10, -6}, {10, -6}, {10, 6}, {-10, 6}});
+  world.addBox({0.0, 0.0}, 2.0, 1.0, 0.3);
+  world.addBox({-7.0, 3.5}, 1.0, 1.0);
+  world.addBox({6.5, -4.0}, 1.5, 0.6, -0.5);
+  world.addBox({7.0, 4.0}, 0.5, 0.5);
+  world.addBox({-6.0, -4.5}, 0.8, 1.6, 0.2);
+  world.addBox({3.0, 2.5}, 0.6, 0.6, 0.7);
+  return world;
+}
+
+Scan sweep(const sim::RayCaster& world, const Pose2& robot, std::mt19937* rng) {
+  sim::SweepGeometry geometry;
+  geometry.angle_increment = kPi / 180;
+  geometry.count = 181;
+  geometry.max_range = 30.0;
+  Scan scan;
+  scan.ranges = sim::simulateRanges(world, robot, geometry, 0.01, rng);
+  scan.angle_min = geometry.angle_min;
+  scan.angle_increment = geometry.angle_increment;
+  scan.range_min = 0.0;
+  scan.range_max = 30.0;
+  return scan;
+}
+
+std::vector<Vector2> pointsOf(const Scan& scan) {
+  return scanPointsInRobotFrame(scan, Pose2(), ScanMatcherOptions());
+}
+
+// Two laps of a circle of radius 4.5 m around the hall's centre, 0.1 m apart.
+std::vector<Pose2> twoLaps() {
+  std::vector<Pose2> poses;
+  const double radius = 4.5, step = 0.1;
+  const int per_lap = static_cast<int>(2.0 * kPi * radius / step);
+  for (int i = 0; i <= 2 * per_lap; ++i) {
+    const double a = 2.0 * kPi * i / per_lap;
+    poses.emplace_back(radius * std::sin(a), -radius * std::cos(a), a);
+  }
+  return poses;
+}
+
+TEST(CorrelativeSearch, FindsAPoseMetresAndDegreesFromTheGuess) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(3);
+  const Pose2 reference_pose(-2.0, 1.0, 0.4), query_pose(-1.2, 0.6, 0.3);
+  std::vector<Vector2> reference;
+  for (const Vector2& p : pointsOf(sweep(world, reference_pose, &rng))) {
+    reference.push_back(transformFrom(reference_pose, p));
+  }
+  const CorrelativeMatcherOptions options;
+  const LikelihoodGrid grid(reference, options);
+  const Pose2 guess = compose(query_pose, Pose2(1.2, -0.9, degToRad(8.0)));
+  const CorrelativeResult result =
+      correlativeSearch(pointsOf(sweep(world, query_pose, &rng)), grid, guess, 2.0, 0.2, options);
+  EXPECT_GT(result.score, 0.7);
+  EXPECT_LT(std::hypot(result.pose.x - query_pose.x, result.pose.y - query_pose.y), 0.08);
+  EXPECT_LT(std::abs(wrapAngle(result.pose.theta - query_pose.theta)), degToRad(1.0));
+}
+
+TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
+  // coarse_factor 1 makes the bound exact per translation, i.e. exhaustive.
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(4);
+  const Pose2 pose(3.0, -2.0, 2.0);
+  std::vector<Vector2> reference;
+  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
+    reference.push_back(transformFrom(pose, p));
+  }
+  const std::vector<Vector2> query =
+      pointsOf(sweep(world, compose(pose, Pose2(0.3, 0.1, 0.05)), &rng));
+  CorrelativeMatcherOptions exhaustive;
+  exhaustive.coarse_factor = 1;
+  const CorrelativeMatcherOptions bounded;  // coarse_factor 8
+  const CorrelativeResult a =
+      correlativeSearch(query, LikelihoodGrid(reference, exhaustive), pose, 1.0, 0.1, exhaustive);
+  const CorrelativeResult b =
+      correlativeSearch(query, LikelihoodGrid(reference, bounded), pose, 1.0, 0.1, bounded);
+  EXPECT_NEAR(a.score, b.score, 1e-6);
+  EXPECT_LT(maxAbsDifference(a.pose, b.pose), 1e-9);
+}
+
+struct LoopRun {
+  std::vector<Pose2> truth, front_end, closed;
+  LoopClosureCounters counters;
+};
+
+// The front end turns 0.4 deg too far per metre: after a lap of 28 m the
+// heading is 11 deg off and the position metres.
+LoopRun runTwoLaps(bool enabled) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(11);
+  LoopRun run;
+  run.truth = twoLaps();
+  LoopClosureOptions options;
+  options.enabled = enabled;
+  LoopCloser closer(options, ScanMatcherOptions());
+  Pose2 front_end = run.truth.front();
+  for (size_t i = 0; i < run.truth.size(); ++i) {
+    if (i > 0) {
+      const Pose2 step = between(run.truth[i - 1], run.truth[i]);
+      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
+    }
+    run.front_end.push_back(front_end);
+    closer.addScan(0.1 * i, sweep(world, run.truth[i], &rng), Pose2(), front_end, true);
+  }
+  closer.finish();
+  for (const StampedPose& p : closer.scanPoses()) run.closed.push_back(p.pose);
+  run.counters = closer.counters();
+  return run;
+}
+
+double positionError(const Pose2& a, const Pose2& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {
+  const LoopRun run = runTwoLaps(/*enabled=*/true);
+  ASSERT_EQ(run.closed.size(), run.truth.size());
+  EXPECT_GT(run.counters.accepted, 3);
+  EXPECT_EQ(run.counters.dropped, 0);
+  const Pose2& truth_end = run.truth.back();
+  EXPECT_GT(positionError(run.front_end.back(), truth_end), 1.5);  // open without the back end
+  EXPECT_LT(positionError(run.closed.back(), truth_end), 0.15);
+  double worst = 0.0;
+  for (size_t i = 0; i < run.truth.size(); ++i) {
+    worst = std::max(worst, positionError(run.closed[i], run.truth[i]));
+  }
+  EXPECT_LT(worst, 0.4);
+}
+
+TEST(LoopCloser, DisabledKeepsTheFrontEndTrajectory) {
+  const LoopRun run = runTwoLaps(/*enabled=*/false);
+  EXPECT_EQ(run.counters.accepted, 0);
+  for (size_t i = 0; i < run.truth.size(); ++i) {
+    EXPECT_LT(maxAbsDifference(run.closed[i], run.front_end[i]), 1e-9);
+  }
+}
+
+TEST(LoopClosureOptions, ValidateNamesTheBadField) {
+  LoopClosureOptions options;
+  EXPECT_EQ(options.validate(), "");
+  options.search_radius_max = 0.1;
+  EXPECT_NE(options.validate().find("search_radius_max"), std::string::npos);
+  options = LoopClosureOptions();
+  options.correlative.resolution = 0.0;
+  EXPECT_NE(options.validate().find("correlative: resolution"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam

@@ -1,0 +1,157 @@
+#include "ekf_slam_core/pose_graph/pose_graph.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <cassert>
+#include <cmath>
+
+namespace ekf_slam {
+
+std::string PoseGraphOptions::validate() const {
+  if (max_iterations < 1) return "max_iterations must be >= 1";
+  if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
+  if (!(robust_kernel_width > 0.0)) return "robust_kernel_width must be > 0 (sigmas)";
+  if (!(initial_lambda >= 0.0)) return "initial_lambda must be >= 0";
+  return "";
+}
+
+Vector3 edgeError(const Pose2& from, const Pose2& to, const Pose2& measurement, Matrix3* J_e_from,
+                  Matrix3* J_e_to) {
+  Matrix3 J_r_from, J_r_to, J_e_r;
+  const Pose2 relative = between(from, to, &J_r_from, &J_r_to);
+  const Pose2 error = between(measurement, relative, nullptr, &J_e_r);
+  if (J_e_from) *J_e_from = J_e_r * J_r_from;
+  if (J_e_to) *J_e_to = J_e_r * J_r_to;
+  return error.vector();
+}
+
+namespace {
+
+// Cauchy kernel on s = eᵀ Ω e with width c (in sigmas): ρ(s) and ρ'(s).
+double cauchyCost(double s, double c) { return c * c * std::log1p(s / (c * c)); }
+double cauchyWeight(double s, double c) { return 1.0 / (1.0 + s / (c * c)); }
+
+// Node 0 is fixed, so node i > 0 owns the unknowns 3 (i − 1) … 3 (i − 1) + 2.
+int unknownIndex(int node) { return 3 * (node - 1); }
+
+void addBlock(std::vector<Eigen::Triplet<double>>* triplets, int row_node, int col_node,
+              const Matrix3& block) {
+  if (row_node == 0 || col_node == 0) return;
+  const int r = unknownIndex(row_node), c = unknownIndex(col_node);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) triplets->emplace_back(r + i, c + j, block(i, j));
+  }
+}
+
+}  // namespace
+
+int PoseGraph::addNode(const Pose2& pose) {
+  poses_.push_back(pose);
+  return nodeCount() - 1;
+}
+
+int PoseGraph::addEdge(const PoseGraphEdge& edge) {
+  assert(edge.from >= 0 && edge.from < nodeCount() && edge.to >= 0 && edge.to < nodeCount());
+  edges_.push_back(edge);
+  return static_cast<int>(edges_.size()) - 1;
+}
+
+double PoseGraph::edgeChi2(int index) const {
+  const PoseGraphEdge& edge = edges_[index];
+  const Vector3 e = edgeError(poses_[edge.from], poses_[edge.to], edge.measurement);
+  return e.dot(edge.information * e);
+}
+
+double PoseGraph::edgeWeight(int index, double robust_kernel_width) const {
+  return edges_[index].robust ? cauchyWeight(edgeChi2(index), robust_kernel_width) : 1.0;
+}
+
+double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) const {
+  double total = 0.0;
+  for (const PoseGraphEdge& edge : edges_) {
+    if (!edge.active) continue;
+    const Vector3 e = edgeError(poses[edge.from], poses[edge.to], edge.measurement);
+    const double s = e.dot(edge.information * e);
+    total += edge.robust ? cauchyCost(s, kernel_width) : s;
+  }
+  return total;
+}
+
+PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
+  PoseGraphSummary summary;
+  const double c = options.robust_kernel_width;
+  summary.initial_cost = summary.final_cost = cost(poses_, c);
+  const int unknowns = 3 * (nodeCount() - 1);
+  if (unknowns <= 0) {
+    summary.converged = true;
+    return summary;
+  }
+  double lambda = options.initial_lambda;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    // Normal equations at the current poses, weights frozen (IRLS).
+    triplets.clear();
+    triplets.reserve(edges_.size() * 36 + unknowns);
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(unknowns);
+    for (const PoseGraphEdge& edge : edges_) {
+      if (!edge.active) continue;
+      Matrix3 J_from, J_to;
+      const Vector3 e =
+          edgeError(poses_[edge.from], poses_[edge.to], edge.measurement, &J_from, &J_to);
+      const double w = edge.robust ? cauchyWeight(e.dot(edge.information * e), c) : 1.0;
+      const Matrix3 omega = w * edge.information;
+      addBlock(&triplets, edge.from, edge.from, J_from.transpose() * omega * J_from);
+      addBlock(&triplets, edge.from, edge.to, J_from.transpose() * omega * J_to);
+      addBlock(&triplets, edge.to, edge.from, J_to.transpose() * omega * J_from);
+      addBlock(&triplets, edge.to, edge.to, J_to.transpose() * omega * J_to);
+      if (edge.from != 0) b.segment<3>(unknownIndex(edge.from)) += J_from.transpose() * omega * e;
+      if (edge.to != 0) b.segment<3>(unknownIndex(edge.to)) += J_to.transpose() * omega * e;
+    }
+    Eigen::SparseMatrix<double> H(unknowns, unknowns);
+    H.setFromTriplets(triplets.begin(), triplets.end());
+    const Eigen::VectorXd diagonal = H.diagonal();
+    solver.analyzePattern(H);
+
+    // Levenberg-Marquardt: raise the damping until a step lowers the cost.
+    bool improved = false;
+    double largest_step = 0.0;
+    for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
+      Eigen::SparseMatrix<double> damped = H;
+      for (int k = 0; k < unknowns; ++k) {
+        // A node no edge touches keeps a unit diagonal so the system stays regular.
+        damped.coeffRef(k, k) += lambda * diagonal(k) + (diagonal(k) > 0.0 ? 0.0 : 1.0);
+      }
+      solver.factorize(damped);
+      if (solver.info() != Eigen::Success) {
+        lambda = std::max(1e-6, lambda * 10.0);
+        continue;
+      }
+      const Eigen::VectorXd step = solver.solve(-b);
+      if (!step.allFinite()) break;
+      std::vector<Pose2> candidate = poses_;
+      for (int node = 1; node < nodeCount(); ++node) {
+        candidate[node] =
+            Pose2::fromVector(poses_[node].vector() + step.segment<3>(unknownIndex(node)));
+      }
+      const double new_cost = cost(candidate, c);
+      if (new_cost <= summary.final_cost) {
+        poses_ = std::move(candidate);
+        summary.final_cost = new_cost;
+        largest_step = step.cwiseAbs().maxCoeff();
+        lambda = std::max(options.initial_lambda, lambda * 0.1);
+        improved = true;
+      } else {
+        lambda = std::max(1e-6, lambda * 10.0);
+      }
+    }
+    summary.iterations = iteration + 1;
+    if (!improved || largest_step < options.convergence_step) {
+      summary.converged = true;  // no step lowers the cost any more: a minimum
+      break;
+    }
+  }
+  return summary;
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,170 @@
+// Pose-graph optimiser on small graphs with known answers.
+#include "ekf_slam_core/pose_graph/pose_graph.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "ekf_slam_core/testing/numerical_jacobian.h"
+
+namespace ekf_slam {
+namespace {
+
+using Eigen::VectorXd;
+using testing::numericalJacobian;
+
+Matrix3 informationOf(double sigma_translation, double sigma_rotation) {
+  return Vector3(1.0 / (sigma_translation * sigma_translation),
+                 1.0 / (sigma_translation * sigma_translation),
+                 1.0 / (sigma_rotation * sigma_rotation))
+      .asDiagonal();
+}
+
+PoseGraphEdge edge(int from, int to, const Pose2& z, const Matrix3& information,
+                   bool robust = false) {
+  PoseGraphEdge e;
+  e.from = from;
+  e.to = to;
+  e.measurement = z;
+  e.information = information;
+  e.robust = robust;
+  return e;
+}
+
+// Poses on a circle of radius 5 m, heading along the tangent.
+std::vector<Pose2> circle(int count) {
+  std::vector<Pose2> poses;
+  for (int i = 0; i < count; ++i) {
+    const double a = 2.0 * kPi * i / count;
+    poses.emplace_back(5.0 * std::sin(a), 5.0 - 5.0 * std::cos(a), a);
+  }
+  return poses;
+}
+
+double largestError(const PoseGraph& graph, const std::vector<Pose2>& truth) {
+  double worst = 0.0;
+  for (int i = 0; i < graph.nodeCount(); ++i) {
+    worst = std::max(worst, maxAbsDifference(graph.pose(i), truth[i]));
+  }
+  return worst;
+}
+
+class EdgeJacobians : public ::testing::TestWithParam<double> {};
+// Headings near ±pi included: the error's angle must not jump there.
+INSTANTIATE_TEST_SUITE_P(Headings, EdgeJacobians,
+                         ::testing::Values(0.0, 0.7, -2.0, kPi - 1e-3, -kPi + 1e-3));
+
+TEST_P(EdgeJacobians, MatchCentralDifferences) {
+  const double heading = GetParam();
+  const Pose2 from(0.4, -1.2, heading), to(2.1, 0.6, heading + 0.9);
+  const Pose2 z(1.9, 1.6, 0.75);  // close to, not exactly, the relative pose
+  Matrix3 J_from, J_to;
+  edgeError(from, to, z, &J_from, &J_to);
+  VectorXd both(6);
+  both << from.vector(), to.vector();
+  const auto f = [&z](const VectorXd& v) -> VectorXd {
+    return edgeError(Pose2::fromVector(v.head<3>()), Pose2::fromVector(v.tail<3>()), z);
+  };
+  const Eigen::MatrixXd numerical = numericalJacobian(f, both, {2});
+  EXPECT_LT((numerical.leftCols<3>() - J_from).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT((numerical.rightCols<3>() - J_to).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(PoseGraph, SpreadsALoopErrorEvenlyOverEqualEdges) {
+  // Along x: two steps of 1 m each and a loop edge saying 2.3 m, all with
+  // the same information. The 0.3 m disagreement splits in three: 1.1, 2.2.
+  PoseGraph graph;
+  for (int i = 0; i < 3; ++i) graph.addNode(Pose2(i, 0.0, 0.0));
+  const Matrix3 info = informationOf(0.1, 0.01);
+  graph.addEdge(edge(0, 1, Pose2(1.0, 0, 0), info));
+  graph.addEdge(edge(1, 2, Pose2(1.0, 0, 0), info));
+  graph.addEdge(edge(0, 2, Pose2(2.3, 0, 0), info));
+  const PoseGraphSummary summary = graph.optimize(PoseGraphOptions());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_NEAR(graph.pose(1).x, 1.1, 1e-9);
+  EXPECT_NEAR(graph.pose(2).x, 2.2, 1e-9);
+  EXPECT_NEAR(graph.pose(2).y, 0.0, 1e-9);
+  EXPECT_EQ(graph.pose(0).x, 0.0);  // node 0 is the fixed map frame
+}
+
+TEST(PoseGraph, ClosesADriftedLoopToTheTruth) {
+  // Exact measurements around a circle and back to the start, the initial
+  // estimate from odometry with 3 deg of heading drift per step.
+  const std::vector<Pose2> truth = circle(40);
+  PoseGraph graph;
+  graph.addNode(truth[0]);
+  const Matrix3 info = informationOf(0.05, 0.01);
+  for (int i = 1; i < 40; ++i) {
+    const Pose2 z = between(truth[i - 1], truth[i]);
+    graph.addNode(compose(graph.pose(i - 1), compose(z, Pose2(0.0, 0.0, degToRad(3.0)))));
+    graph.addEdge(edge(i - 1, i, z, info));
+  }
+  ASSERT_GT(largestError(graph, truth), 5.0);  // the loop is far from closed
+  graph.addEdge(edge(39, 0, between(truth[39], truth[0]), info, /*robust=*/true));
+  const PoseGraphSummary summary = graph.optimize(PoseGraphOptions());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_LT(summary.final_cost, 1e-12);
+  EXPECT_LT(largestError(graph, truth), 1e-6);
+}
+
+// A circle with noisy odometry and correct loop closures between laps plus
+// one false loop that claims two opposite points of the circle coincide.
+struct NoisyLoops {
+  std::vector<Pose2> truth;
+  PoseGraph graph;
+  int false_edge = -1;
+};
+
+NoisyLoops noisyLoopsWithAFalseOne(bool robust_false_loop) {
+  NoisyLoops out;
+  const std::vector<Pose2> lap = circle(30);
+  for (int k = 0; k < 60; ++k) out.truth.push_back(lap[k % 30]);  // two laps
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const double sigma_t = 0.02, sigma_r = 0.005;
+  const Matrix3 info = informationOf(sigma_t, sigma_r);
+  out.graph.addNode(out.truth[0]);
+  for (int i = 1; i < 60; ++i) {
+    const Pose2 true_step = between(out.truth[i - 1], out.truth[i]);
+    const Pose2 z =
+        compose(true_step, Pose2(sigma_t * noise(rng), sigma_t * noise(rng), sigma_r * noise(rng)));
+    out.graph.addNode(compose(out.graph.pose(i - 1), z));
+    out.graph.addEdge(edge(i - 1, i, z, info));
+  }
+  for (int i = 30; i < 60; i += 3) {  // second lap sees the first
+    out.graph.addEdge(edge(i - 30, i, Pose2(), info, /*robust=*/true));
+  }
+  out.false_edge = out.graph.addEdge(edge(5, 50, Pose2(), info, robust_false_loop));
+  return out;
+}
+
+TEST(PoseGraph, CauchyKernelDownweightsAFalseLoop) {
+  NoisyLoops robust = noisyLoopsWithAFalseOne(/*robust_false_loop=*/true);
+  PoseGraphOptions options;
+  options.max_iterations = 50;
+  robust.graph.optimize(options);
+  // The false edge joins points 10 m apart; the map stays within decimetres.
+  EXPECT_LT(largestError(robust.graph, robust.truth), 0.25);
+  EXPECT_LT(robust.graph.edgeWeight(robust.false_edge, options.robust_kernel_width), 1e-3);
+  // The correct loops keep (almost) full weight.
+  for (int k = 0; k < static_cast<int>(robust.graph.edges().size()); ++k) {
+    if (robust.graph.edges()[k].robust && k != robust.false_edge) {
+      EXPECT_GT(robust.graph.edgeWeight(k, options.robust_kernel_width), 0.5) << "edge " << k;
+    }
+  }
+
+  // Without the kernel the same false edge bends the map by metres.
+  NoisyLoops plain = noisyLoopsWithAFalseOne(/*robust_false_loop=*/false);
+  plain.graph.optimize(options);
+  EXPECT_GT(largestError(plain.graph, plain.truth), 1.0);
+}
+
+TEST(PoseGraphOptions, ValidateNamesTheBadField) {
+  PoseGraphOptions options;
+  EXPECT_EQ(options.validate(), "");
+  options.robust_kernel_width = 0.0;
+  EXPECT_NE(options.validate().find("robust_kernel_width"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam
