@@ -8,7 +8,8 @@
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt,
 // trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's
-// header stamp with 6 decimals), landmarks.yaml, map.pgm + map.yaml (from the
+// header stamp with 6 decimals), covariance_filtered.txt (the filter's pose
+// covariance per scan, for NEES checks), landmarks.yaml, map.pgm + map.yaml (from the
 // smoothed trajectory), map_filtered.*, map_odometry.*, the figures and
 // report.txt. report.txt is written last: a directory without it holds no
 // complete result. Exit code 0 on success, 1 on bad arguments or
@@ -106,6 +107,28 @@ std::string writeLandmarks(const std::string& path, const ekf_slam::EkfSlam& fil
     out << "  - {id: " << filter.landmarks()[s].id << ", x: " << p.x() << ", y: " << p.y()
         << ", covariance: [" << c(0, 0) << ", " << c(0, 1) << ", " << c(1, 1)
         << "], observations: " << filter.landmarks()[s].observations << "}\n";
+  }
+  return out ? "" : path + ": write error";
+}
+
+// The filter's pose covariance for every scan: that of the iteration the
+// scan's pose hangs off (the scan's own when it was iterated; dead-reckoned
+// scans between iterations are more uncertain than this). For consistency
+// checks (NEES) against a ground truth.
+std::string writeFilteredCovariances(const std::string& path, const ekf_slam::SlamPipeline& p) {
+  std::ofstream out(path);
+  if (!out) return path + ": cannot write";
+  out.precision(9);
+  out << "# stamp  xx xy xtheta yy ytheta thetatheta  (filtered pose covariance, m^2, m*rad, "
+         "rad^2; of the scan's iteration)\n";
+  const auto& steps = p.iterations().steps();
+  for (const ekf_slam::ScanRecord& r : p.scans()) {
+    if (r.iteration < 0 || r.iteration >= static_cast<int>(steps.size())) continue;
+    const ekf_slam::Matrix3& c = steps[r.iteration].filtered_cov;
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.6f", r.stamp);
+    out << stamp << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(0, 2) << ' ' << c(1, 1) << ' '
+        << c(1, 2) << ' ' << c(2, 2) << '\n';
   }
   return out ? "" : path + ": write error";
 }
@@ -222,6 +245,9 @@ int main(int argc, char** argv) {
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_smoothed.txt", smoothed);
   if (error.empty())
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_odometry.txt", odometry);
+  if (error.empty()) {
+    error = writeFilteredCovariances(out_dir + "/covariance_filtered.txt", pipeline);
+  }
   if (error.empty() && config.pipeline.scan_matching.enabled) {
     // The control source alone (scan-matched odometry, before the filter).
     std::vector<ekf_slam::StampedPose> matched;
