@@ -1,0 +1,116 @@
+#!/usr/bin/python3
+"""Consistency of the filter on a recorded simulator run, offline.
+
+A live simulated loop gives one NEES figure per 2.5 minutes of real time; a
+bag recorded from it (sim_office_loop.test and sim_replay.test record one)
+can be replayed through ekf_slam_offline in seconds, deterministically, and
+with different configurations. This script scores such a replay:
+trajectory_filtered.txt and covariance_filtered.txt of the run against the
+bag's /ground_truth/odom (map frame = the truth at the first scan, as
+sim_monitor.py does), with the same 2 mm / 1 mrad truth allowance.
+
+usage:
+  replay_consistency.py --bag BAG --out DIR [--config YAML] [--runner EXE]
+      runs ekf_slam_offline on BAG into DIR first (default config:
+      config/ekf_slam_sim.yaml), then scores it
+  replay_consistency.py --bag BAG --out DIR --no-run
+      scores an existing run in DIR
+
+Prints the average pose NEES with its 95 % band for the effective number of
+independent samples, and the rms normalised error per axis (1.0 when the
+filter's σ fits its errors).
+"""
+import argparse
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import rosbag
+
+import sim_monitor
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def read_truth(bag_path):
+    truth = []
+    with rosbag.Bag(bag_path) as bag:
+        for _, msg, _ in bag.read_messages(topics=["/ground_truth/odom"]):
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            truth.append((msg.header.stamp.to_sec(), p.x, p.y, yaw))
+    truth.sort()
+    if len(truth) < 2:
+        raise RuntimeError("%s has no /ground_truth/odom (not a simulator recording?)" % bag_path)
+    return truth
+
+
+def read_rows(path, columns):
+    rows = {}
+    with open(path) as f:
+        for line in f:
+            if line.strip() and not line.startswith("#"):
+                values = [float(v) for v in line.split()]
+                if len(values) != columns:
+                    raise RuntimeError("%s: expected %d columns, got %d" %
+                                       (path, columns, len(values)))
+                rows[round(values[0], 6)] = values
+    return rows
+
+
+def score(truth, run_dir):
+    poses = read_rows(os.path.join(run_dir, "trajectory_filtered.txt"), 4)
+    covariances = read_rows(os.path.join(run_dir, "covariance_filtered.txt"), 7)
+    stamps = sorted(s for s in poses if s in covariances and
+                    sim_monitor.interpolate(truth, s) is not None)
+    if len(stamps) < 2:
+        raise RuntimeError("%s: fewer than 2 scans overlap the ground truth" % run_dir)
+    first = poses[stamps[0]][1:4]
+    map_world = sim_monitor.inverse(
+        sim_monitor.compose(sim_monitor.interpolate(truth, stamps[0]), sim_monitor.inverse(first)))
+    allowance = np.diag(np.square(sim_monitor.TRUTH_SIGMA))
+    nees, normalised = [], []
+    for s in stamps:
+        est = poses[s][1:4]
+        true = sim_monitor.compose(map_world, sim_monitor.interpolate(truth, s))
+        e = np.array([est[0] - true[0], est[1] - true[1], sim_monitor.wrap(est[2] - true[2])])
+        c = covariances[s][1:]
+        cov = np.array([[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]]) + allowance
+        nees.append(float(e @ np.linalg.solve(cov, e)))
+        normalised.append(e / np.sqrt(np.diag(cov)))
+    samples = sim_monitor.effective_samples(nees)
+    band = sim_monitor.nees_band(3, max(1, int(round(samples))))
+    rms = np.sqrt(np.mean(np.square(normalised), axis=0))
+    return np.mean(nees), len(nees), samples, band, rms
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--bag", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--config", default=os.path.join(HERE, "..", "config", "ekf_slam_sim.yaml"))
+    parser.add_argument("--runner", default="ekf_slam_offline",
+                        help="path of ekf_slam_offline (default: found by rosrun)")
+    parser.add_argument("--no-run", action="store_true")
+    args = parser.parse_args()
+    if not args.no_run:
+        runner = ([args.runner] if os.path.sep in args.runner
+                  else ["rosrun", "ekf_slam", args.runner])
+        result = subprocess.run(runner + ["--bag", args.bag, "--out", args.out, "--config",
+                                          args.config, "--no-figures"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if result.returncode != 0:
+            sys.exit("replay_consistency: ekf_slam_offline failed (%d):\n%s" %
+                     (result.returncode, result.stdout[-2000:]))
+    mean, count, samples, band, rms = score(read_truth(args.bag), args.out)
+    inside = band[0] <= mean <= band[1]
+    print("average pose NEES: %.2f over %d scans (%.0f independent), 95%% band %.2f..%.2f: %s" %
+          (mean, count, samples, band[0], band[1], "inside" if inside else "outside"))
+    print("rms normalised error: x %.2f, y %.2f, heading %.2f (1.0 = the filter's sigma fits)" %
+          tuple(rms))
+
+
+if __name__ == "__main__":
+    main()
