@@ -143,18 +143,26 @@ int main(int argc, char** argv) {
   const double truth_period = 1.0 / params.ground_truth_rate;
   double next_robot_step = 0.0, next_truth = 0.0;
   history.add(0.0, start);
+  // The true pose is that of the last robot step; the truth is stamped with
+  // that step's time, not with the (up to one step later) publishing time,
+  // which at 0.5 rad/s would put 2.5 mrad of error into the truth.
+  ros::Time true_pose_stamp = ros::Time::now(), last_truth_stamp;
   while (ros::ok()) {
     const double now = seconds();
     if (now >= next_robot_step) {
       robot.step(now);
+      true_pose_stamp = ros::Time::now();
       history.add(now, robot.truePose());
       next_robot_step = std::max(next_robot_step + params.robot_step, now);
     }
     laser.spinOnce(now);
     if (now >= next_truth) {
       next_truth = std::max(next_truth + truth_period, now);
-      truth_publisher.publish(robot.truePose(), robot.velocity(), robot.rotationalVelocity(),
-                              ros::Time::now());
+      if (true_pose_stamp > last_truth_stamp) {  // each pose once (tf refuses repeats)
+        last_truth_stamp = true_pose_stamp;
+        truth_publisher.publish(robot.truePose(), robot.velocity(), robot.rotationalVelocity(),
+                                true_pose_stamp);
+      }
     }
     // Sleep to the earliest deadline; at most 5 ms so that commands from
     // the drivers are answered promptly (a real device answers within ms).
