@@ -39,6 +39,8 @@ class OfficeLoop(unittest.TestCase):
         parser.add_argument("--timeout", type=float, default=800.0)
         parser.add_argument("--slam-node", default="/ekf_slam")
         args, _ = parser.parse_known_args(argv)
+        # sim_office_loop.test starts SLAM paused; it maps once the recorder listens.
+        args.resume_after_recorder = "/office_loop_recorder"
         r = sim_monitor.run(args)  # rospy.init_node is done here
         print(sim_monitor.report_text(r))
         self.assertLess(r["final_position_error"], 0.10)

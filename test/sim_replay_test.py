@@ -2,6 +2,8 @@
 """Live run vs offline replay of its own recording (test/sim_replay.test; the
 office-loop test reuses pause_and_replay for its smoother check).
 
+0. The .test file starts SLAM paused; it is resumed once the recorder
+   subscribes to /scan, so the bag holds every scan the live map used.
 1. Waits for the waypoint driver, pauses the live SLAM node and takes its
    path (one pose per processed scan), its last pose and its landmark count.
 2. Stops the recorder and keeps from the bag exactly the scans the live node
@@ -165,6 +167,8 @@ class SimReplay(unittest.TestCase):
         directory = argv[argv.index("--dir") + 1]
         bag = argv[argv.index("--bag") + 1]
         rospy.init_node("sim_replay_test")
+        # sim_replay.test starts SLAM paused: it maps once the recorder listens.
+        sim_monitor.resume_when_recording("/sim_replay_recorder")
         r = pause_and_replay(self, directory, "/sim_replay_recorder", bag)
         self.assertEqual(r["offline_landmarks"], r["live_landmarks"])
         self.assertLess(r["distance"], 0.01)

@@ -395,9 +395,35 @@ class Recorder:
         return landmarks
 
 
+def resume_when_recording(recorder_node, slam_node="/ekf_slam", topic="/scan", timeout=60.0):
+    """For a SLAM node started paused (start_paused): waits until
+    `recorder_node` subscribes to `topic` (and a second more for the
+    connection), then calls the node's ~resume, so that the recording holds
+    every scan the map is built from."""
+    import rosgraph
+    import rospy
+    from std_srvs.srv import Trigger
+    master = rosgraph.Master(rospy.get_name())
+    deadline = time.time() + timeout
+    while time.time() < deadline and not rospy.is_shutdown():
+        _, subscribers, _ = master.getSystemState()
+        if any(t == topic and recorder_node in nodes for t, nodes in subscribers):
+            break
+        time.sleep(0.1)
+    else:
+        raise RuntimeError("%s did not subscribe to %s within %.0f s" %
+                           (recorder_node, topic, timeout))
+    time.sleep(1.0)
+    rospy.wait_for_service(slam_node + "/resume", timeout)
+    if not rospy.ServiceProxy(slam_node + "/resume", Trigger)().success:
+        raise RuntimeError(slam_node + "/resume refused")
+
+
 def run(args):
     import rospy
     rospy.init_node("sim_monitor")
+    if getattr(args, "resume_after_recorder", None):
+        resume_when_recording(args.resume_after_recorder, args.slam_node)
     recorder = Recorder(args.slam_node)
     start = time.time()
     rate = rospy.Rate(5)

@@ -74,6 +74,8 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
       diagnostics_(node, private_node) {
   for (DropReason reason : kAllReasons) drops_[reason] = 0;
   localize_only_ = params_.localize_only;
+  paused_ = params_.start_paused;
+  if (paused_) ROS_INFO("ekf_slam_node: started paused (start_paused): call ~resume to map");
   path_.header.frame_id = params_.map_frame;
 
   pose_publisher_ = node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);

@@ -25,6 +25,7 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
   read.integer("nis_window", &p->nis_window, 1, 1000000);
   read.number("ellipse_probability", &p->ellipse_probability, 0.01, 0.9999);
   read.flag("localize_only", &p->localize_only);
+  read.flag("start_paused", &p->start_paused);
   read.text("initial_map", &p->initial_map, /*required=*/false);
   read.number("diagnostic_period", &p->diagnostic_period, 0.01, 60.0);
   read.integer("path_max_poses", &p->path_max_poses, 0, 100000000);

@@ -32,6 +32,7 @@ struct SlamNodeParams {
   int nis_window = 100;                // matches in the NIS average on /diagnostics
   double ellipse_probability = 0.95;   // of the covariance ellipses drawn
   bool localize_only = false;          // start without adding landmarks
+  bool start_paused = false;           // drop scans until ~resume (a recorder can start first)
   std::string initial_map;             // landmark map file loaded at start ("" none)
   double diagnostic_period = 1.0;      // s
   int path_max_poses = 10000;          // newest poses in `path` (0: all); the smoother keeps all
