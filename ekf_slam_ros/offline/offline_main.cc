@@ -5,6 +5,7 @@
 //
 //   rosrun ekf_slam ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR
 //                                    [--config YAML] [--max-scans N] [--no-figures]
+//                                    [--trace]
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt,
 // trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's
@@ -36,7 +37,7 @@ using ekf_slam::Pose2;
 
 void usage() {
   std::cerr << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
-               "                        [--max-scans N] [--no-figures]\n";
+               "                        [--max-scans N] [--no-figures] [--trace]\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -152,6 +153,7 @@ int main(int argc, char** argv) {
   std::string bag_path, carmen_path, out_dir, config_path;
   long max_scans = -1;
   bool figures = true;
+  bool trace = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     // roslaunch appends __name:=… and __log:=…; remappings mean nothing here.
@@ -168,6 +170,8 @@ int main(int argc, char** argv) {
       max_scans = std::atol(argv[++i]);
     } else if (arg == "--no-figures") {
       figures = false;
+    } else if (arg == "--trace") {
+      trace = true;
     } else {
       usage();
       return 1;
@@ -223,8 +227,30 @@ int main(int argc, char** argv) {
   const bool tty = ::isatty(STDERR_FILENO);
   const size_t total = log.scans.size();
   size_t next_report = 0;
+  // --trace: every observation's association, for finding the scan where an
+  // estimate goes wrong (the live node publishes the same as `association`).
+  std::ofstream trace_file;
+  if (trace) {
+    trace_file.open(out_dir + "/association_trace.txt");
+    trace_file << "# stamp  x y theta (filtered, after the scan)  range bearing  decision  "
+                  "landmark_id  d2 (Mahalanobis squared of the match or the best candidate)\n";
+    trace_file.precision(9);
+  }
   for (size_t i = 0; i < total; ++i) {
-    pipeline.processScan(log.scans[i].scan, log.scans[i].odometry);
+    const ekf_slam::ScanResult result =
+        pipeline.processScan(log.scans[i].scan, log.scans[i].odometry);
+    if (trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
+      const auto& decisions = result.iteration.association.observations;
+      for (size_t k = 0; k < result.observations.size() && k < decisions.size(); ++k) {
+        char stamp[32];
+        std::snprintf(stamp, sizeof(stamp), "%.6f", log.scans[i].scan.stamp);
+        trace_file << stamp << ' ' << result.pose.x << ' ' << result.pose.y << ' '
+                   << result.pose.theta << ' ' << result.observations[k].z.range << ' '
+                   << result.observations[k].z.bearing << ' '
+                   << ekf_slam::toString(decisions[k].decision) << ' ' << decisions[k].landmark_id
+                   << ' ' << decisions[k].mahalanobis2 << '\n';
+      }
+    }
     if (i + 1 >= next_report || i + 1 == total) {
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
