@@ -50,12 +50,12 @@ class OfficeLoop(unittest.TestCase):
         self.assertGreater(r["odometry_max_position_error"], 0.2)
         self.assertGreater(r["odometry_mean_position_error"], 3.0 * r["mean_position_error"])
         self.assertGreater(r["odometry_max_position_error"], 3.0 * r["max_position_error"])
-        # The pose NEES of one real-time run lies inside its band in some runs
-        # and above it in others (2.2, 4.0, 6.9, 5.1 measured; band ~2..4):
-        # the EKF's known heading overconfidence (the map's heading error is
-        # under-estimated as it is linearised at changing estimates). That
-        # acceptance item is open (README); here only a gross regression
-        # guard, not the band.
+        # One run's pose NEES is a weak test (its errors are correlated over
+        # the whole loop: ~5-30 independent samples), and over seeds the
+        # filter is still mildly overconfident in heading
+        # (tools/office_monte_carlo.sh: 3.84 with first-estimates
+        # Jacobians, band 2.38-3.69). That acceptance item is open
+        # (README); here only a gross regression guard, not the band.
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)

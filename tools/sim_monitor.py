@@ -422,9 +422,9 @@ def resume_when_recording(recorder_node, slam_node="/ekf_slam", topic="/scan", t
 def run(args):
     import rospy
     rospy.init_node("sim_monitor")
+    recorder = Recorder(args.slam_node)  # listening before SLAM may start
     if getattr(args, "resume_after_recorder", None):
         resume_when_recording(args.resume_after_recorder, args.slam_node)
-    recorder = Recorder(args.slam_node)
     start = time.time()
     rate = rospy.Rate(5)
     while not rospy.is_shutdown() and not recorder.done:
@@ -446,6 +446,8 @@ def main():
     parser.add_argument("--world", default="office")
     parser.add_argument("--timeout", type=float, default=600.0)
     parser.add_argument("--slam-node", default="/ekf_slam")
+    parser.add_argument("--resume-after-recorder", metavar="NODE",
+                        help="SLAM was started paused: resume it once NODE records /scan")
     args, _ = parser.parse_known_args([a for a in sys.argv[1:] if not a.startswith("__")])
     result = run(args)
     sys.stdout.write(report_text(result))
