@@ -341,9 +341,51 @@ std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
   return out;
 }
 
+// With loop closure on, the back end's optimised trajectory is a far better
+// starting point than the filtered one (Intel: 0.04 m against 3.1 m): the
+// problem is not convex, and from the filtered poses the loop edges look
+// like outliers to their kernel. Each iteration starts at its own scan's
+// optimised pose, moved into the map frame (the filter's first pose).
+std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
+  std::vector<Pose2> out;
+  if (!loop_closer_ || records_.empty()) return out;
+  const std::vector<StampedPose> optimized = loop_closer_->scanPoses();
+  std::vector<int> loop_scan_of_record(records_.size(), -1);
+  for (size_t i = 0; i < record_of_loop_scan_.size() && i < optimized.size(); ++i) {
+    loop_scan_of_record[record_of_loop_scan_[i]] = static_cast<int>(i);
+  }
+  const int iterations = static_cast<int>(full_recorder_.iterations().size());
+  out.assign(iterations, Pose2());
+  std::vector<char> found(iterations, 0);
+  bool have_frame = false;
+  Pose2 map_from_graph;
+  for (size_t r = 0; r < records_.size(); ++r) {
+    const ScanRecord& record = records_[r];
+    const int scan = loop_scan_of_record[r];
+    if (scan < 0) continue;
+    if (!have_frame) {
+      // The record's own pose in the map frame, hung off its iteration.
+      const Pose2 filtered = record.filtered;
+      map_from_graph = compose(filtered, inverse(optimized[scan].pose));
+      have_frame = true;
+    }
+    const int k = record.iteration;
+    if (k < 0 || k >= iterations || found[k]) continue;
+    // The iteration's pose = the scan's pose minus the odometry since it.
+    out[k] = compose(compose(map_from_graph, optimized[scan].pose),
+                     inverse(between(record.odometry_at_iteration, record.odometry)));
+    found[k] = 1;
+  }
+  for (int k = 0; k < iterations; ++k) {
+    if (!found[k]) return {};  // an iteration without a scan in the graph: keep the filter's
+  }
+  return out;
+}
+
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details) const {
-  FullSmootherResult result =
-      smoothFull(full_recorder_, filter_, loopConstraints(), options_.smoother);
+  const std::vector<Pose2> initial = loopClosedIterationPoses();
+  FullSmootherResult result = smoothFull(full_recorder_, filter_, loopConstraints(),
+                                         options_.smoother, initial.empty() ? nullptr : &initial);
   std::vector<StampedPose> out = scanPosesFrom(result.poses);
   if (details) *details = std::move(result);
   return out;

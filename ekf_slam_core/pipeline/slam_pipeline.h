@@ -173,6 +173,7 @@ class SlamPipeline {
   int pruneRarelySeen();  // returns how many landmarks were removed
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;
+  std::vector<Pose2> loopClosedIterationPoses() const;  // empty without loop closure
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled

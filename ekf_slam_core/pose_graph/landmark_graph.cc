@@ -12,6 +12,7 @@ std::string LandmarkGraphOptions::validate() const {
   if (max_iterations < 1) return "max_iterations must be >= 1";
   if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
   if (!(initial_lambda >= 0.0)) return "initial_lambda must be >= 0";
+  if (!(min_relative_decrease >= 0.0)) return "min_relative_decrease must be >= 0";
   if (!(kernel_width > 0.0)) return "kernel_width must be > 0 (sigmas)";
   return "";
 }
@@ -137,23 +138,28 @@ namespace {
 // unknowns start at the given offsets (−1: a fixed pose, no unknowns).
 class NormalEquations {
  public:
-  explicit NormalEquations(int unknowns) : b_(Eigen::VectorXd::Zero(unknowns)) {}
+  NormalEquations(int unknowns, size_t expected_entries) : b_(Eigen::VectorXd::Zero(unknowns)) {
+    triplets_.reserve(expected_entries);
+  }
 
   template <typename JacobianA, typename JacobianB, typename Information, typename Error>
   void addPair(int offset_a, const JacobianA& J_a, int offset_b, const JacobianB& J_b,
                const Information& omega, const Error& e) {
-    addBlock(offset_a, offset_a, J_a.transpose() * omega * J_a);
-    addBlock(offset_b, offset_b, J_b.transpose() * omega * J_b);
-    const Eigen::MatrixXd cross = J_a.transpose() * omega * J_b;
+    // Fixed-size products: no heap allocation per edge.
+    const auto omega_a = (omega * J_a).eval();
+    const auto omega_b = (omega * J_b).eval();
+    addBlock(offset_a, offset_a, (J_a.transpose() * omega_a).eval());
+    addBlock(offset_b, offset_b, (J_b.transpose() * omega_b).eval());
+    const auto cross = (J_a.transpose() * omega_b).eval();
     addBlock(offset_a, offset_b, cross);
-    addBlock(offset_b, offset_a, cross.transpose());
+    addBlock(offset_b, offset_a, cross.transpose().eval());
     if (offset_a >= 0) b_.segment(offset_a, J_a.cols()) += J_a.transpose() * omega * e;
     if (offset_b >= 0) b_.segment(offset_b, J_b.cols()) += J_b.transpose() * omega * e;
   }
 
   template <typename Jacobian, typename Information, typename Error>
   void addSingle(int offset, const Jacobian& J, const Information& omega, const Error& e) {
-    addBlock(offset, offset, J.transpose() * omega * J);
+    addBlock(offset, offset, (J.transpose() * omega * J).eval());
     if (offset >= 0) b_.segment(offset, J.cols()) += J.transpose() * omega * e;
   }
 
@@ -165,7 +171,8 @@ class NormalEquations {
   const Eigen::VectorXd& gradient() const { return b_; }
 
  private:
-  void addBlock(int row, int col, const Eigen::MatrixXd& block) {
+  template <typename Block>
+  void addBlock(int row, int col, const Block& block) {
     if (row < 0 || col < 0) return;
     for (int i = 0; i < block.rows(); ++i) {
       for (int j = 0; j < block.cols(); ++j) triplets_.emplace_back(row + i, col + j, block(i, j));
@@ -204,7 +211,8 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   bool pattern_known = false;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    NormalEquations normal(unknowns);
+    NormalEquations normal(unknowns,
+                           36 * (relatives_.size() + priors_.size()) + 25 * observations_.size());
     for (const RelativePoseEdge& edge : relatives_) {
       Matrix3 J_from, J_to;
       const Vector3 e = relativePoseError(poses_[edge.from], poses_[edge.to], edge, &J_from, &J_to);
@@ -245,6 +253,7 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
 
     bool improved = false;
     double largest_step = 0.0;
+    const double cost_before = summary.final_cost;
     for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
       Eigen::SparseMatrix<double> damped = H;
       for (int k = 0; k < unknowns; ++k) {
@@ -278,7 +287,8 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
       }
     }
     summary.iterations = iteration + 1;
-    if (!improved || largest_step < options.convergence_step) {
+    if (!improved || largest_step < options.convergence_step ||
+        cost_before - summary.final_cost < options.min_relative_decrease * summary.final_cost) {
       summary.converged = true;
       break;
     }

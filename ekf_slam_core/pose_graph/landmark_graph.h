@@ -62,8 +62,10 @@ struct ObservationEdge {
 struct LandmarkGraphOptions {
   int max_iterations = 100;        // Levenberg–Marquardt steps
   double convergence_step = 1e-6;  // m or rad: a smaller largest step component ends it
-  double initial_lambda = 1e-6;    // damping at the first step (relative to the diagonal)
-  double kernel_width = 3.0;       // sigmas, for every robust edge
+  // A step that lowers the cost by less than this fraction ends it too.
+  double min_relative_decrease = 1e-7;
+  double initial_lambda = 1e-6;  // damping at the first step (relative to the diagonal)
+  double kernel_width = 3.0;     // sigmas, for every robust edge
 
   std::string validate() const;  // empty when valid, else names the bad field
 };

@@ -117,7 +117,8 @@ struct Problem {
 
 FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
                               const std::vector<IterationConstraint>& constraints,
-                              const FullSmootherOptions& options) {
+                              const FullSmootherOptions& options,
+                              const std::vector<Pose2>* initial_poses) {
   FullSmootherResult result;
   const std::vector<SmootherIteration>& iterations = record.iterations();
   if (iterations.empty()) return result;
@@ -161,6 +162,26 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
   const bool prior_is_proper = isPositiveDefinite(record.priorCovariance());
   std::vector<Pose2> poses;
   for (const SmootherIteration& it : iterations) poses.push_back(it.filtered);
+  if (initial_poses != nullptr && static_cast<int>(initial_poses->size()) == n) {
+    poses = *initial_poses;
+    // The filter's landmark estimates belong to the filtered poses: start
+    // each landmark where its sightings put it from the new poses (the
+    // median per coordinate, so a few wrong associations do not drag it).
+    for (size_t g = 0; g < groups.size(); ++g) {
+      std::vector<double> xs, ys;
+      for (int t : groups[g]) {
+        for (const auto& [k, i] : tracks[t].sightings) {
+          const Vector2 m = landmarkFromObservation(poses[k], filter.options().laser_pose,
+                                                    iterations[k].sightings[i].observation.z);
+          xs.push_back(m.x());
+          ys.push_back(m.y());
+        }
+      }
+      std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
+      std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+      group_position[g] = Vector2(xs[xs.size() / 2], ys[ys.size() / 2]);
+    }
+  }
 
   auto build = [&](Problem* problem) {
     LandmarkGraph& graph = problem->graph;

@@ -338,9 +338,11 @@ int main(int argc, char** argv) {
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks, " << smoother.observation_edges << " observation edges, "
-         << smoother.constraint_edges << " loop edges; " << smoother.summary.iterations
-         << " iterations, cost " << smoother.summary.initial_cost << " -> "
-         << smoother.summary.final_cost << ", " << smoothing_seconds << " s\n"
+         << smoother.constraint_edges << " loop edges, " << smoother.detached_visits
+         << " revisits detached; " << smoother.summary.iterations << " iterations ("
+         << (smoother.summary.converged ? "converged" : "not converged") << "), cost "
+         << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost << ", "
+         << smoothing_seconds << " s\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
          << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
