@@ -12,9 +12,9 @@ with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
     same true corner);
 and then (issue 7) replays the run's recording through offline.launch
 (sim_replay_test.pause_and_replay): the offline outputs exist and the run is
-reproduced (same landmarks, final pose within 1 cm). The smoothed and
-filtered errors against the truth are printed; the smoother is not asserted
-to be better (it is not, see the comment below).
+reproduced (same landmarks, final pose within 1 cm), and the smoothed
+trajectory (the full smoother) is at least as close to the truth as the
+filtered one (issue 7).
 """
 import os
 import sys
@@ -66,13 +66,19 @@ class OfficeLoop(unittest.TestCase):
                                                   wait_for_done=False)
         self.assertEqual(replay["offline_landmarks"], replay["live_landmarks"])
         self.assertLess(replay["distance"], 0.01)
-        # Reported, not asserted: the thesis's pose-only RTS smoother (eq.
-        # 3.62-3.66) ignores the pose-landmark correlations and does not beat
-        # the filter reliably (smoothed 0.0110 m vs filtered 0.0521 m mean error
-        # in one run, 0.0455 m vs 0.0428 m in another). Issue 7 keeps this item
-        # open (README).
-        print("smoother vs filter against the truth: %.4f m vs %.4f m mean position error" % (
-            replay["smoothed_error"], replay["filtered_error"]))
+        # Issue 7: trajectory_smoothed.txt is the full smoother (batch MAP
+        # over every pose, landmark and observation the filter used,
+        # docs/maths.md 8b); it must not be worse than the filter. Measured
+        # on recorded office loops: 0.0081 m vs 0.0309 m and 0.0388 m vs
+        # 0.0428 m (filtered), and 0.7189 m vs 0.7206 m on a demo recording
+        # without the laser mount on tf. The thesis's pose-only RTS smoother
+        # (trajectory_rts.txt: 0.0300, 0.0455, 0.7106 m) is printed only.
+        # Known risk (docs/offline.md): the same demo recording run with its
+        # laser mount corrected gives 0.0410 m smoothed vs 0.0341 m filtered.
+        print("full smoother / RTS / filter against the truth: %.4f / %.4f / %.4f m mean "
+              "position error" % (replay["smoothed_error"], replay["rts_error"],
+                                  replay["filtered_error"]))
+        self.assertLessEqual(replay["smoothed_error"], replay["filtered_error"])
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # make benchmark: offline EKF-SLAM on the real Pioneer + SICK logs in
 # ../shared/datasets, scored with the relation metric (Kümmerle et al. 2009)
-# for raw odometry, the scan-matched control, the filter and the smoother, with wall-clock and peak
+# for raw odometry, the scan-matched control, the filter, the RTS smoother, the full smoother
+# and the loop-closed pose graph, with wall-clock and peak
 # memory. Results go to output/benchmark/<dataset>/ and a summary table to
 # output/benchmark/summary.md.
 #
@@ -37,7 +38,7 @@ for name in ${DATASETS:-intel aces}; do
   proc=$(sed -n 's/^processing: \([0-9.]*\) s.*/\1/p' "$dir/report.txt")
   # scan_matched: the laser front end's own track (the filter's control),
   # written only when scan matching is on.
-  for traj in odometry scan_matched filtered smoothed optimized; do
+  for traj in odometry scan_matched filtered rts smoothed optimized; do
     [ -f "$dir/trajectory_$traj.txt" ] || continue
     result=$("$bin/evaluate_relations" --relations "$rel" --trajectory "$dir/trajectory_$traj.txt" --label "$name $traj")
     echo "$result"

@@ -29,6 +29,7 @@ void observe(EkfSlam& filter, const AssociationOptions& association,
     int id = -1;
     if (filter.augment(observations[i], &id) == FilterStatus::kOk) {
       report.new_landmark_ids.push_back(id);
+      report.created.push_back({i, id});
     } else {
       ++report.augment_failures;
     }

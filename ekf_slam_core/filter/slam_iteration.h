@@ -17,10 +17,11 @@ struct IterationReport {
   FilterStatus update_status = FilterStatus::kOk;
   AssociationResult association;
   std::vector<PointMatch> matches;
-  std::vector<double> nis;                  // per match, same order
-  std::vector<int> new_landmark_ids;        // landmarks added this iteration
-  int augment_failures = 0;                 // new-landmark observations refused
-  int pruned = 0;                           // tentative landmarks removed
+  std::vector<double> nis;            // per match, same order
+  std::vector<int> new_landmark_ids;  // landmarks added this iteration
+  std::vector<PointMatch> created;  // the observation each new landmark was made from (same order)
+  int augment_failures = 0;         // new-landmark observations refused
+  int pruned = 0;                   // tentative landmarks removed
   std::vector<std::pair<int, int>> merged;  // duplicate landmarks fused: (kept id, dropped id)
 
   bool ok() const {

@@ -128,6 +128,7 @@ void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& fro
   key.front_end = front_end;
   key.points = points;
   key.sparse = thinned(points, options_.search_point_spacing);
+  key.scan_index = static_cast<int>(scans_.size());  // its ScanEntry is pushed next
   ++counters_.key_scans;
   adjacency_.emplace_back();
   if (keys_.empty()) {

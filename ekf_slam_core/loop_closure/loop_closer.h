@@ -108,6 +108,9 @@ class LoopCloser {
 
   const LoopClosureCounters& counters() const { return counters_; }
   const PoseGraph& graph() const { return graph_; }
+  // Graph node `key` was taken at this scan (index in addScan order). Loop
+  // edges are the graph's robust edges; the sequential ones are not robust.
+  int keyScanIndex(int key) const { return keys_[key].scan_index; }
 
  private:
   struct KeyScan {
@@ -116,6 +119,7 @@ class LoopCloser {
     std::vector<Vector2> sparse;        // thinned for the correlative search
     double travel_from_previous = 0.0;  // m
     int retry_after = 0;                // key index before which it is not tried again
+    int scan_index = -1;                // index of its scan in addScan order
   };
   struct ScanEntry {
     double stamp;

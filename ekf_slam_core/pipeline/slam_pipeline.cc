@@ -44,6 +44,8 @@ std::string PipelineOptions::validate() const {
   if (!error.empty()) return "scan_matching.motion_noise: " + error;
   error = loop_closure.validate();
   if (!error.empty()) return "loop_closure: " + error;
+  error = smoother.validate();
+  if (!error.empty()) return "smoother: " + error;
   return "";
 }
 
@@ -74,7 +76,9 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       loop_closer_(options.loop_closure.enabled
                        ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
                        : nullptr),
-      filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {}
+      filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {
+  full_recorder_.setPrior(Pose2(), options.initial_pose_covariance);
+}
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
   return compose(filter_.pose(), between(last_odometry_, odometry));
@@ -106,6 +110,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   auto record = [&]() {
     if (loop_closer_ && scan != nullptr) {
       loop_closer_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
+      record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
     }
     ScanRecord r;
     r.stamp = stamp;
@@ -197,6 +202,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
 
 void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* features,
                            const Pose2& odometry, bool predict, double dt, ScanResult* out) {
+  const OdometryControl control = controlFromOdometry(last_odometry_, odometry);
   if (predict) {
     const FilterStatus status = filter_.predict(last_odometry_, odometry, dt);
     if (status != FilterStatus::kOk) {
@@ -237,6 +243,8 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   out->iteration.predict_status = FilterStatus::kOk;
   observe(filter_, options_.association, out->observations, &out->iteration);
   recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
+  full_recorder_.addIteration(stamp, filter_, predict ? &control : nullptr, out->observations,
+                              out->iteration);
 
   ++counters_.iterations;
   if (out->iteration.update_status != FilterStatus::kOk) ++counters_.update_failures;
@@ -281,18 +289,105 @@ std::vector<StampedPose> SlamPipeline::optimizedScanPoses() const {
   return loop_closer_ ? loop_closer_->scanPoses() : std::vector<StampedPose>();
 }
 
-std::vector<StampedPose> SlamPipeline::smoothedScanPoses() const {
-  const std::vector<SmoothedPose> smoothed = smoothTrajectory(recorder_.steps());
+std::vector<StampedPose> SlamPipeline::scanPosesFrom(
+    const std::vector<Pose2>& iteration_poses) const {
   std::vector<StampedPose> out;
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) {
-    if (r.iteration < 0 || r.iteration >= static_cast<int>(smoothed.size())) {
+    if (r.iteration < 0 || r.iteration >= static_cast<int>(iteration_poses.size())) {
       out.push_back({r.stamp, r.filtered});
       continue;
     }
-    out.push_back({r.stamp, compose(smoothed[r.iteration].pose,
+    out.push_back({r.stamp, compose(iteration_poses[r.iteration],
                                     between(r.odometry_at_iteration, r.odometry))});
   }
+  return out;
+}
+
+std::vector<StampedPose> SlamPipeline::rtsScanPoses() const {
+  std::vector<Pose2> poses;
+  for (const SmoothedPose& p : smoothTrajectory(recorder_.steps())) poses.push_back(p.pose);
+  return scanPosesFrom(poses);
+}
+
+// The back end's loop edges join key scans; a key scan's pose is its
+// iteration's pose composed with the odometry since that iteration, so each
+// loop becomes a constraint between two iteration poses with those offsets.
+std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
+  std::vector<IterationConstraint> out;
+  if (!loop_closer_) return out;
+  const PoseGraph& graph = loop_closer_->graph();
+  for (const PoseGraphEdge& edge : graph.edges()) {
+    if (!edge.robust || !edge.active) continue;  // sequential edge, or a dropped loop
+    const int from_scan = loop_closer_->keyScanIndex(edge.from);
+    const int to_scan = loop_closer_->keyScanIndex(edge.to);
+    if (from_scan < 0 || to_scan < 0 ||
+        from_scan >= static_cast<int>(record_of_loop_scan_.size()) ||
+        to_scan >= static_cast<int>(record_of_loop_scan_.size())) {
+      continue;
+    }
+    const ScanRecord& a = records_[record_of_loop_scan_[from_scan]];
+    const ScanRecord& b = records_[record_of_loop_scan_[to_scan]];
+    if (a.iteration < 0 || b.iteration < 0) continue;
+    IterationConstraint c;
+    c.from_iteration = a.iteration;
+    c.to_iteration = b.iteration;
+    c.from_offset = between(a.odometry_at_iteration, a.odometry);
+    c.to_offset = between(b.odometry_at_iteration, b.odometry);
+    c.measurement = edge.measurement;
+    c.information = edge.information;
+    out.push_back(c);
+  }
+  return out;
+}
+
+// With loop closure on, the back end's optimised trajectory is a far better
+// starting point than the filtered one (Intel: 0.04 m against 3.1 m): the
+// problem is not convex, and from the filtered poses the loop edges look
+// like outliers to their kernel. Each iteration starts at its own scan's
+// optimised pose, moved into the map frame (the filter's first pose).
+std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
+  std::vector<Pose2> out;
+  if (!loop_closer_ || records_.empty()) return out;
+  const std::vector<StampedPose> optimized = loop_closer_->scanPoses();
+  std::vector<int> loop_scan_of_record(records_.size(), -1);
+  for (size_t i = 0; i < record_of_loop_scan_.size() && i < optimized.size(); ++i) {
+    loop_scan_of_record[record_of_loop_scan_[i]] = static_cast<int>(i);
+  }
+  const int iterations = static_cast<int>(full_recorder_.iterations().size());
+  out.assign(iterations, Pose2());
+  std::vector<char> found(iterations, 0);
+  bool have_frame = false;
+  Pose2 map_from_graph;
+  for (size_t r = 0; r < records_.size(); ++r) {
+    const ScanRecord& record = records_[r];
+    const int scan = loop_scan_of_record[r];
+    if (scan < 0) continue;
+    if (!have_frame) {
+      // The record's own pose in the map frame, hung off its iteration.
+      const Pose2 filtered = record.filtered;
+      map_from_graph = compose(filtered, inverse(optimized[scan].pose));
+      have_frame = true;
+    }
+    const int k = record.iteration;
+    if (k < 0 || k >= iterations || found[k]) continue;
+    // The iteration's pose = the scan's pose minus the odometry since it.
+    out[k] = compose(compose(map_from_graph, optimized[scan].pose),
+                     inverse(between(record.odometry_at_iteration, record.odometry)));
+    found[k] = 1;
+  }
+  for (int k = 0; k < iterations; ++k) {
+    if (!found[k]) return {};  // an iteration without a scan in the graph: keep the filter's
+  }
+  return out;
+}
+
+std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details) const {
+  const std::vector<Pose2> initial = loopClosedIterationPoses();
+  FullSmootherResult result = smoothFull(full_recorder_, filter_, loopConstraints(),
+                                         options_.smoother, initial.empty() ? nullptr : &initial);
+  std::vector<StampedPose> out = scanPosesFrom(result.poses);
+  if (details) *details = std::move(result);
   return out;
 }
 

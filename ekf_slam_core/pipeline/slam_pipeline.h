@@ -29,6 +29,7 @@
 #include "ekf_slam_core/filter/slam_iteration.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
+#include "ekf_slam_core/smoother/full_smoother.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
 namespace ekf_slam {
@@ -58,6 +59,9 @@ struct PipelineOptions {
   // Loop-closing back end (pose graph over key scans) fed with the control
   // source's poses; its trajectory is optimizedScanPoses().
   LoopClosureOptions loop_closure;
+  // The full smoother (batch MAP over every pose, landmark and observation
+  // the filter used, plus the loop closures when on): smoothedScanPoses().
+  FullSmootherOptions smoother;
 
   // Noise of a scan-matched increment: a few millimetres and a tenth of a
   // degree per step, growing slowly with the motion (docs/offline.md).
@@ -142,9 +146,13 @@ class SlamPipeline {
   // iteration, with odom → base_link the robot's raw odometry.
   Pose2 mapToOdom() const;
 
-  // Poses for every scan, from the RTS-smoothed iterations (scans between
-  // iterations follow their odometry from the last iteration).
-  std::vector<StampedPose> smoothedScanPoses() const;
+  // Poses for every scan from the full smoother's iteration poses (scans
+  // between iterations follow their odometry from the last iteration). Runs
+  // the batch optimisation on every call; `details` (if given) receives its
+  // result.
+  std::vector<StampedPose> smoothedScanPoses(FullSmootherResult* details = nullptr) const;
+  // The same from the thesis's RTS smoother over the pose alone (§3.4.5.1).
+  std::vector<StampedPose> rtsScanPoses() const;
   std::vector<StampedPose> filteredScanPoses() const;
 
   // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
@@ -163,12 +171,17 @@ class SlamPipeline {
                bool predict, double dt, ScanResult* out);
   Pose2 deadReckoned(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
+  std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
+  std::vector<IterationConstraint> loopConstraints() const;
+  std::vector<Pose2> loopClosedIterationPoses() const;  // empty without loop closure
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
   std::unique_ptr<LoopCloser> loop_closer_;             // null when disabled
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
+  FullSmootherRecorder full_recorder_;
+  std::vector<int> record_of_loop_scan_;  // records_ index of each scan given to the loop closer
   PipelineCounters counters_;
   std::vector<ScanRecord> records_;
   bool initialised_ = false;

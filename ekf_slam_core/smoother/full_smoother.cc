@@ -1,0 +1,311 @@
+#include "ekf_slam_core/smoother/full_smoother.h"
+
+#include "ekf_slam_core/filter/chi_square.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <memory>
+
+namespace ekf_slam {
+namespace {
+
+// Floor on the motion edge's covariance: (0.1 mm)² and (10 µrad)². The
+// filter's model has no lateral noise for a turn on the spot (G₀ is
+// singular when trans = 0); the floor keeps the information finite. It has
+// to stay below the smallest real per-step variance: the simulator's
+// random walk has 10⁻⁸ m² per step, and a (1 mm)² floor loosened the chain
+// enough to make the smoothed office loop 3× worse (measured).
+constexpr double kMotionFloorTranslation = 1e-8;  // m²
+constexpr double kMotionFloorRotation = 1e-10;    // rad²
+
+bool isPositiveDefinite(const Matrix3& m) {
+  const Eigen::LLT<Matrix3> llt(m);
+  return m.allFinite() && llt.info() == Eigen::Success &&
+         llt.matrixLLT().diagonal().minCoeff() > 0.0;
+}
+
+}  // namespace
+
+std::string FullSmootherOptions::validate() const {
+  if (revisit_gap < 1) return "revisit_gap must be >= 1 (iterations)";
+  if (!(revisit_gate_probability > 0.0 && revisit_gate_probability < 1.0)) {
+    return "revisit_gate_probability must be in (0, 1)";
+  }
+  if (max_verification_rounds < 0) return "max_verification_rounds must be >= 0";
+  return optimizer.validate();
+}
+
+void FullSmootherRecorder::setPrior(const Pose2& mean, const Matrix3& covariance) {
+  prior_mean_ = mean;
+  prior_covariance_ = covariance;
+}
+
+void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
+                                        const OdometryControl* control,
+                                        const std::vector<PointObservation>& observations,
+                                        const IterationReport& report) {
+  SmootherIteration it;
+  it.stamp = stamp;
+  it.filtered = filter.pose();
+  if (control != nullptr) {
+    it.has_control = true;
+    it.control = *control;
+    it.control_covariance = controlCovariance(*control, filter.options().motion_noise);
+  }
+  // The update refuses as a whole, and then report.matches is empty: only
+  // what the filter really used enters.
+  for (const PointMatch& m : report.matches) {
+    it.sightings.push_back({m.landmark_id, observations[m.observation]});
+  }
+  for (const PointMatch& m : report.created) {
+    it.sightings.push_back({m.landmark_id, observations[m.observation]});
+  }
+  for (const auto& pair : report.merged) merged_into_[pair.second] = pair.first;
+  // Landmarks removed later (pruned, merged away) keep the estimate they had
+  // when last seen, for the initial guess.
+  for (const LandmarkSighting& s : it.sightings) {
+    const int slot = filter.slotOf(s.landmark_id);
+    if (slot >= 0) last_estimate_[s.landmark_id] = filter.landmarkPosition(slot);
+  }
+  for (const auto& pair : report.merged) {
+    const int slot = filter.slotOf(pair.first);
+    if (slot >= 0) last_estimate_[pair.first] = filter.landmarkPosition(slot);
+  }
+  iterations_.push_back(std::move(it));
+}
+
+int FullSmootherRecorder::survivorOf(int id) const {
+  // Merges form chains (a into b, later b into c); follow them to the end.
+  for (auto it = merged_into_.find(id); it != merged_into_.end(); it = merged_into_.find(id)) {
+    id = it->second;
+  }
+  return id;
+}
+
+Matrix3 motionEdgeCovariance(const OdometryControl& u, const Matrix3& control_covariance) {
+  Matrix3 G0;
+  const Pose2 d = applyControl(Pose2(), u, nullptr, &G0);
+  Matrix3 A = Matrix3::Identity();
+  A.topLeftCorner<2, 2>() = d.rotation().transpose();
+  Matrix3 sigma = A * G0 * control_covariance * G0.transpose() * A.transpose();
+  sigma = 0.5 * (sigma + sigma.transpose()).eval();
+  sigma.diagonal() +=
+      Vector3(kMotionFloorTranslation, kMotionFloorTranslation, kMotionFloorRotation);
+  return sigma;
+}
+
+namespace {
+
+// A landmark's sightings in iteration order, cut where it was not seen for
+// more than `revisit_gap` iterations: each piece is one visit.
+struct Track {
+  int landmark_id = -1;                        // surviving id
+  std::vector<std::pair<int, int>> sightings;  // (iteration, index into its sightings)
+};
+
+// Tracks that share a landmark node.
+using Group = std::vector<int>;
+
+struct Problem {
+  LandmarkGraph graph;
+  std::vector<std::vector<int>> edges_of_track;  // observation edge indices per track
+  explicit Problem(const Pose2& laser) : graph(laser) {}
+};
+
+}  // namespace
+
+FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
+                              const std::vector<IterationConstraint>& constraints,
+                              const FullSmootherOptions& options,
+                              const std::vector<Pose2>* initial_poses) {
+  FullSmootherResult result;
+  const std::vector<SmootherIteration>& iterations = record.iterations();
+  if (iterations.empty()) return result;
+  const int n = static_cast<int>(iterations.size());
+
+  // Tracks per surviving landmark (merges applied).
+  std::unordered_map<int, std::vector<int>> tracks_of;
+  std::vector<Track> tracks;
+  std::vector<int> order;  // landmark ids in order of first sighting (deterministic)
+  for (int k = 0; k < n; ++k) {
+    const std::vector<LandmarkSighting>& sightings = iterations[k].sightings;
+    for (int i = 0; i < static_cast<int>(sightings.size()); ++i) {
+      const int id = record.survivorOf(sightings[i].landmark_id);
+      std::vector<int>& mine = tracks_of[id];
+      if (mine.empty()) order.push_back(id);
+      if (mine.empty() || k - tracks[mine.back()].sightings.back().first > options.revisit_gap) {
+        mine.push_back(static_cast<int>(tracks.size()));
+        tracks.push_back({id, {}});
+      }
+      tracks[mine.back()].sightings.emplace_back(k, i);
+    }
+  }
+  // One group per landmark to begin with: the filter's associations.
+  std::vector<Group> groups;
+  std::vector<Vector2> group_position;
+  for (int id : order) {
+    const std::vector<int>& mine = tracks_of[id];
+    size_t count = 0;
+    for (int t : mine) count += tracks[t].sightings.size();
+    // A landmark seen once adds no information on the poses (its two
+    // unknowns absorb its two equations exactly): left out.
+    if (count < 2) continue;
+    groups.push_back(mine);
+    const int slot = filter.slotOf(id);
+    const auto last = record.lastEstimates().find(id);
+    group_position.push_back(slot >= 0                              ? filter.landmarkPosition(slot)
+                             : last != record.lastEstimates().end() ? last->second
+                                                                    : Vector2(Vector2::Zero()));
+  }
+
+  const bool prior_is_proper = isPositiveDefinite(record.priorCovariance());
+  std::vector<Pose2> poses;
+  for (const SmootherIteration& it : iterations) poses.push_back(it.filtered);
+  if (initial_poses != nullptr && static_cast<int>(initial_poses->size()) == n) {
+    poses = *initial_poses;
+    // The filter's landmark estimates belong to the filtered poses: start
+    // each landmark where its sightings put it from the new poses (the
+    // median per coordinate, so a few wrong associations do not drag it).
+    for (size_t g = 0; g < groups.size(); ++g) {
+      std::vector<double> xs, ys;
+      for (int t : groups[g]) {
+        for (const auto& [k, i] : tracks[t].sightings) {
+          const Vector2 m = landmarkFromObservation(poses[k], filter.options().laser_pose,
+                                                    iterations[k].sightings[i].observation.z);
+          xs.push_back(m.x());
+          ys.push_back(m.y());
+        }
+      }
+      std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
+      std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+      group_position[g] = Vector2(xs[xs.size() / 2], ys[ys.size() / 2]);
+    }
+  }
+
+  auto build = [&](Problem* problem) {
+    LandmarkGraph& graph = problem->graph;
+    for (int k = 0; k < n; ++k) {
+      // Zero prior covariance (the map frame is the first pose): hold it fixed.
+      graph.addPose(poses[k], k == 0 && !prior_is_proper);
+    }
+    if (prior_is_proper) {
+      PosePriorEdge prior;
+      prior.pose = 0;
+      prior.mean = record.priorMean();
+      prior.information = record.priorCovariance().inverse();
+      graph.addEdge(prior);
+    }
+    for (int k = 1; k < n; ++k) {
+      const SmootherIteration& it = iterations[k];
+      if (!it.has_control) continue;
+      RelativePoseEdge motion;
+      motion.from = k - 1;
+      motion.to = k;
+      motion.measurement = applyControl(Pose2(), it.control);
+      motion.information = motionEdgeCovariance(it.control, it.control_covariance).inverse();
+      graph.addEdge(motion);
+    }
+    problem->edges_of_track.assign(tracks.size(), {});
+    int edge_index = 0;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      const int node = graph.addLandmark(group_position[g]);
+      for (int t : groups[g]) {
+        for (const auto& [k, i] : tracks[t].sightings) {
+          const PointObservation& obs = iterations[k].sightings[i].observation;
+          ObservationEdge edge;
+          edge.pose = k;
+          edge.landmark = node;
+          edge.z = obs.z;
+          edge.information = obs.covariance.inverse();
+          edge.kernel = options.observation_kernel;
+          graph.addEdge(edge);
+          problem->edges_of_track[t].push_back(edge_index++);
+        }
+      }
+    }
+    result.constraint_edges = 0;
+    for (const IterationConstraint& c : constraints) {
+      if (c.from_iteration < 0 || c.from_iteration >= n || c.to_iteration < 0 ||
+          c.to_iteration >= n) {
+        continue;
+      }
+      RelativePoseEdge edge;
+      edge.from = c.from_iteration;
+      edge.to = c.to_iteration;
+      edge.from_offset = c.from_offset;
+      edge.to_offset = c.to_offset;
+      edge.measurement = c.measurement;
+      edge.information = c.information;
+      edge.kernel = options.loop_kernel;
+      graph.addEdge(edge);
+      ++result.constraint_edges;
+    }
+    result.observation_edges = edge_index;
+  };
+
+  std::unique_ptr<Problem> problem;
+  for (int round = 0;; ++round) {
+    problem = std::make_unique<Problem>(filter.options().laser_pose);
+    build(problem.get());
+    const LandmarkGraphSummary summary = problem->graph.optimize(options.optimizer);
+    if (round == 0) result.summary.initial_cost = summary.initial_cost;
+    result.summary.iterations += summary.iterations;
+    result.summary.final_cost = summary.final_cost;
+    result.summary.converged = summary.converged;
+    poses = problem->graph.poses();
+    for (size_t g = 0; g < groups.size(); ++g) group_position[g] = problem->graph.landmarks()[g];
+    if (round >= options.max_verification_rounds) break;
+
+    // Verify the filter's re-associations: a visit whose sightings the
+    // optimum cannot explain (their χ² beyond the gate for 2 per sighting)
+    // belonged to another landmark. It is detached and becomes a landmark of
+    // its own (or is dropped when it holds a single sighting), and the
+    // problem is solved again.
+    int detached = 0;
+    const size_t group_count = groups.size();
+    for (size_t g = 0; g < group_count; ++g) {
+      if (groups[g].size() < 2) continue;
+      std::vector<double> chi2(groups[g].size(), 0.0);
+      std::vector<char> fails(groups[g].size(), 0);
+      int best = 0;
+      for (size_t j = 0; j < groups[g].size(); ++j) {
+        const std::vector<int>& edges = problem->edges_of_track[groups[g][j]];
+        for (int e : edges) chi2[j] += problem->graph.observationChi2(e);
+        fails[j] = chi2[j] > chiSquareQuantile(options.revisit_gate_probability,
+                                               2.0 * static_cast<double>(edges.size()));
+        const double per = chi2[j] / edges.size();
+        const double best_per = chi2[best] / problem->edges_of_track[groups[g][best]].size();
+        if (per < best_per) best = static_cast<int>(j);
+      }
+      Group kept;
+      for (size_t j = 0; j < groups[g].size(); ++j) {
+        const int t = groups[g][j];
+        if (!fails[j] || static_cast<int>(j) == best) {
+          kept.push_back(t);
+          continue;
+        }
+        ++detached;
+        if (tracks[t].sightings.size() < 2) continue;
+        const auto& [k, i] = tracks[t].sightings.front();
+        groups.push_back({t});
+        group_position.push_back(landmarkFromObservation(poses[k], filter.options().laser_pose,
+                                                         iterations[k].sightings[i].observation.z));
+      }
+      groups[g] = kept;
+    }
+    result.detached_visits += detached;
+    if (detached == 0) break;
+  }
+
+  result.poses = problem->graph.poses();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    // A detached visit has no id of its own: only the landmark's first
+    // group (which keeps the filter's id) is reported.
+    const int id = tracks[groups[g].front()].landmark_id;
+    if (result.landmarks.count(id) == 0) result.landmarks[id] = problem->graph.landmarks()[g];
+  }
+  return result;
+}
+
+}  // namespace ekf_slam

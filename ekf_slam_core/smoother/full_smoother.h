@@ -1,0 +1,146 @@
+// Full smoother: the batch maximum-a-posteriori estimate of every robot pose
+// the filter had and every landmark it ever held, over exactly the
+// information the EKF used (GraphSLAM over the filter's own decisions;
+// derivation in docs/maths.md §8).
+//
+// The RTS smoother (rts_smoother.h, thesis §3.4.5.1) runs backwards over the
+// pose marginals alone and drops the pose–landmark correlations, so a
+// landmark re-seen late cannot move the early poses through the map. Here
+// the landmarks are unknowns too, and the estimate is the minimum of
+//   Σ_k ‖motion_k‖²_Σk + Σ_obs ρ(‖z − h(x_k, m_j)‖²_R) + ‖prior‖² (+ loops)
+// with
+// - nodes: the pose of every filter iteration, every landmark the filter
+//   created (a merged landmark's sightings go to the survivor; pruned
+//   landmarks keep theirs);
+// - motion edges: each iteration's control u_k with the filter's Q(u_k),
+//   carried into the pose space by G (Σ_k = A G₀ Q G₀ᵀ Aᵀ, see the maths note);
+// - observation edges: each observation the filter matched or made a
+//   landmark from, with the feature's range–bearing covariance, through the
+//   laser mount; optionally with a robust kernel;
+// - the prior on the first pose (held fixed when its covariance is zero,
+//   as in the shipped configurations);
+// - optional relative-pose edges (the loop closures of the back end).
+// Initialised from the filtered estimates and solved by Levenberg–Marquardt
+// (pose_graph/landmark_graph.h). The filter's data-association decisions
+// are taken as given: the smoother does not re-associate.
+#pragma once
+
+#include <unordered_map>
+#include <vector>
+
+#include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/pose_graph/landmark_graph.h"
+
+namespace ekf_slam {
+
+struct FullSmootherOptions {
+  // Kernel on observation edges: a wrong association (a corner matched to
+  // its neighbour) is down-weighted instead of bending the trajectory.
+  // Cauchy beat Huber and no kernel on every simulated bag (docs/offline.md).
+  RobustKernel observation_kernel = RobustKernel::kCauchy;
+  // Loop-closure edges (Cauchy, as in the back end).
+  RobustKernel loop_kernel = RobustKernel::kCauchy;
+  // kernel_width (sigmas) applies to both kernels. At most 30 LM steps per
+  // solve: on Intel 100 steps took 10 s (the 30 s budget) and, like the
+  // simulated loop with the laser mount corrected, ended farther from the
+  // truth than 30 (0.144 against 0.084 m): the cost keeps falling by less
+  // than 1 (χ²) while the estimate slides along a flat valley that the
+  // filter's wrong associations and its over-confident motion model shape
+  // (docs/offline.md).
+  LandmarkGraphOptions optimizer = defaultOptimizer();
+  static LandmarkGraphOptions defaultOptimizer() {
+    LandmarkGraphOptions o;
+    o.max_iterations = 30;
+    return o;
+  }
+  // Verification of the filter's re-associations. A landmark's sightings
+  // are cut into visits where it was not seen for more than revisit_gap
+  // iterations; after the optimisation, a visit whose χ² exceeds the
+  // revisit_gate_probability quantile of χ²(2 per sighting) is detached
+  // from the landmark (the filter matched it to the wrong one), and the
+  // problem is solved again, at most max_verification_rounds times.
+  int revisit_gap = 50;                     // iterations
+  double revisit_gate_probability = 0.999;  // χ² quantile
+  int max_verification_rounds = 2;          // 0: take every association as given
+
+  std::string validate() const;  // empty when valid, else names the bad field
+};
+
+struct LandmarkSighting {
+  int landmark_id = -1;  // as the filter named it at the time (before any merge)
+  PointObservation observation;
+};
+
+// What one filter iteration used.
+struct SmootherIteration {
+  double stamp = 0.0;  // s
+  Pose2 filtered;      // x_k|k, the initial guess
+  bool has_control = false;
+  OdometryControl control;                       // u_k: from the previous iteration to this one
+  Matrix3 control_covariance = Matrix3::Zero();  // Q(u_k) the filter used
+  std::vector<LandmarkSighting> sightings;
+};
+
+// A relative-pose constraint between two iterations' poses, each carried by
+// a constant offset (a key scan = its iteration's pose ⊕ the odometry since).
+struct IterationConstraint {
+  int from_iteration = 0;
+  int to_iteration = 0;
+  Pose2 from_offset;
+  Pose2 to_offset;
+  Pose2 measurement;  // (to ⊕ to_offset) in the frame of (from ⊕ from_offset)
+  Matrix3 information = Matrix3::Identity();
+};
+
+// Records the forward run: one addIteration() per filter iteration, after
+// its update, augmentation, pruning and merges.
+class FullSmootherRecorder {
+ public:
+  void setPrior(const Pose2& mean, const Matrix3& covariance);
+  // `control` is null on the initialising iteration (no prediction).
+  void addIteration(double stamp, const EkfSlam& filter, const OdometryControl* control,
+                    const std::vector<PointObservation>& observations,
+                    const IterationReport& report);
+
+  const std::vector<SmootherIteration>& iterations() const { return iterations_; }
+  // The landmark a sighting of `id` belongs to after all merges so far.
+  int survivorOf(int id) const;
+  // The filter's estimate of `id` when it was last matched or created.
+  const std::unordered_map<int, Vector2>& lastEstimates() const { return last_estimate_; }
+  const Pose2& priorMean() const { return prior_mean_; }
+  const Matrix3& priorCovariance() const { return prior_covariance_; }
+
+ private:
+  std::vector<SmootherIteration> iterations_;
+  std::unordered_map<int, int> merged_into_;  // dropped id → kept id
+  std::unordered_map<int, Vector2> last_estimate_;
+  Pose2 prior_mean_;
+  Matrix3 prior_covariance_ = Matrix3::Zero();
+};
+
+struct FullSmootherResult {
+  std::vector<Pose2> poses;                    // one per recorded iteration
+  std::unordered_map<int, Vector2> landmarks;  // by surviving id
+  int observation_edges = 0;
+  int constraint_edges = 0;
+  int detached_visits = 0;       // visits the verification took from their landmark
+  LandmarkGraphSummary summary;  // iterations summed over the verification rounds
+};
+
+// `filter` gives the laser mount and the final landmark estimates, the
+// initial guess together with the filtered poses. `initial_poses` (one per
+// iteration, optional) replaces the filtered poses as the initial guess;
+// each landmark then starts at the median of its sightings projected from
+// them. Constraints referring to unknown iterations are ignored.
+FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
+                              const std::vector<IterationConstraint>& constraints,
+                              const FullSmootherOptions& options,
+                              const std::vector<Pose2>* initial_poses = nullptr);
+
+// The pose-space covariance of a motion edge's error
+// between(d, between(x_{k−1}, x_k)), d = applyControl(identity, u), for
+// control noise Q: A G₀ Q G₀ᵀ Aᵀ with G₀ = ∂d/∂u and A = diag(R(d_θ)ᵀ, 1),
+// plus a small floor (G₀ is singular for a turn on the spot).
+Matrix3 motionEdgeCovariance(const OdometryControl& u, const Matrix3& control_covariance);
+
+}  // namespace ekf_slam
