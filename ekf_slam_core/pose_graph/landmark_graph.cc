@@ -17,34 +17,6 @@ std::string LandmarkGraphOptions::validate() const {
   return "";
 }
 
-double robustCost(RobustKernel kernel, double s, double c) {
-  switch (kernel) {
-    case RobustKernel::kNone:
-      return s;
-    case RobustKernel::kHuber: {
-      const double r = std::sqrt(s);
-      return r <= c ? s : 2.0 * c * r - c * c;
-    }
-    case RobustKernel::kCauchy:
-      return c * c * std::log1p(s / (c * c));
-  }
-  return s;
-}
-
-double robustWeight(RobustKernel kernel, double s, double c) {
-  switch (kernel) {
-    case RobustKernel::kNone:
-      return 1.0;
-    case RobustKernel::kHuber: {
-      const double r = std::sqrt(s);
-      return r <= c ? 1.0 : c / r;
-    }
-    case RobustKernel::kCauchy:
-      return 1.0 / (1.0 + s / (c * c));
-  }
-  return 1.0;
-}
-
 Vector3 relativePoseError(const Pose2& from, const Pose2& to, const RelativePoseEdge& edge,
                           Matrix3* J_e_from, Matrix3* J_e_to) {
   Matrix3 J_a_from, J_b_to, J_r_a, J_r_b, J_e_r;
@@ -245,47 +217,34 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
     // fixed and an unobserved unknown (no edge) stays regular.
     for (int k = 0; k < unknowns; ++k) H.coeffRef(k, k) += 0.0;
     H.makeCompressed();
-    const Eigen::VectorXd diagonal = H.diagonal();
     if (!pattern_known) {
       solver.analyzePattern(H);
       pattern_known = true;
     }
 
-    bool improved = false;
-    double largest_step = 0.0;
     const double cost_before = summary.final_cost;
-    for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
-      Eigen::SparseMatrix<double> damped = H;
-      for (int k = 0; k < unknowns; ++k) {
-        damped.coeffRef(k, k) += lambda * diagonal(k) + (diagonal(k) > 0.0 ? 0.0 : 1.0);
-      }
-      solver.factorize(damped);
-      if (solver.info() != Eigen::Success) {
-        lambda = std::max(1e-6, lambda * 10.0);
-        continue;
-      }
-      const Eigen::VectorXd step = solver.solve(-normal.gradient());
-      if (!step.allFinite()) break;
-      std::vector<Pose2> poses = poses_;
-      std::vector<Vector2> landmarks = landmarks_;
-      for (int i = 0; i < poseCount(); ++i) {
-        if (pose_offset[i] >= 0) {
-          poses[i] = Pose2::fromVector(poses_[i].vector() + step.segment<3>(pose_offset[i]));
-        }
-      }
-      for (int j = 0; j < landmarkCount(); ++j) landmarks[j] += step.segment<2>(landmarkOffset(j));
-      const double new_cost = cost(poses, landmarks, c);
-      if (new_cost <= summary.final_cost) {
-        poses_ = std::move(poses);
-        landmarks_ = std::move(landmarks);
-        summary.final_cost = new_cost;
-        largest_step = step.cwiseAbs().maxCoeff();
-        lambda = std::max(options.initial_lambda, lambda * 0.1);
-        improved = true;
-      } else {
-        lambda = std::max(1e-6, lambda * 10.0);
-      }
-    }
+    const DampedStep step = levenbergMarquardtStep(
+        H, normal.gradient(), options.initial_lambda, &lambda, &solver,
+        [&](const Eigen::VectorXd& delta) {
+          std::vector<Pose2> poses = poses_;
+          std::vector<Vector2> landmarks = landmarks_;
+          for (int i = 0; i < poseCount(); ++i) {
+            if (pose_offset[i] >= 0) {
+              poses[i] = Pose2::fromVector(poses_[i].vector() + delta.segment<3>(pose_offset[i]));
+            }
+          }
+          for (int j = 0; j < landmarkCount(); ++j) {
+            landmarks[j] += delta.segment<2>(landmarkOffset(j));
+          }
+          const double new_cost = cost(poses, landmarks, c);
+          if (new_cost > summary.final_cost) return false;
+          poses_ = std::move(poses);
+          landmarks_ = std::move(landmarks);
+          summary.final_cost = new_cost;
+          return true;
+        });
+    const bool improved = step.improved;
+    const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
     if (!improved || largest_step < options.convergence_step ||
         cost_before - summary.final_cost < options.min_relative_decrease * summary.final_cost) {

@@ -25,15 +25,9 @@
 
 #include "ekf_slam_core/geometry/pose2.h"
 #include "ekf_slam_core/models/point_observation_model.h"
+#include "ekf_slam_core/pose_graph/levenberg_marquardt.h"
 
 namespace ekf_slam {
-
-enum class RobustKernel { kNone, kHuber, kCauchy };
-
-// ρ(s) and its weight ρ'(s) for s = eᵀ Ω e, width c in sigmas (√s where the
-// kernel leaves the quadratic: Huber) or where the weight is ½ (Cauchy).
-double robustCost(RobustKernel kernel, double s, double c);
-double robustWeight(RobustKernel kernel, double s, double c);
 
 struct RelativePoseEdge {
   int from = 0;

@@ -1,4 +1,5 @@
 #include "ekf_slam_core/pose_graph/pose_graph.h"
+#include "ekf_slam_core/pose_graph/levenberg_marquardt.h"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -28,8 +29,6 @@ Vector3 edgeError(const Pose2& from, const Pose2& to, const Pose2& measurement, 
 namespace {
 
 // Cauchy kernel on s = eᵀ Ω e with width c (in sigmas): ρ(s) and ρ'(s).
-double cauchyCost(double s, double c) { return c * c * std::log1p(s / (c * c)); }
-double cauchyWeight(double s, double c) { return 1.0 / (1.0 + s / (c * c)); }
 
 // Node 0 is fixed, so node i > 0 owns the unknowns 3 (i − 1) … 3 (i − 1) + 2.
 int unknownIndex(int node) { return 3 * (node - 1); }
@@ -63,7 +62,9 @@ double PoseGraph::edgeChi2(int index) const {
 }
 
 double PoseGraph::edgeWeight(int index, double robust_kernel_width) const {
-  return edges_[index].robust ? cauchyWeight(edgeChi2(index), robust_kernel_width) : 1.0;
+  return edges_[index].robust
+             ? robustWeight(RobustKernel::kCauchy, edgeChi2(index), robust_kernel_width)
+             : 1.0;
 }
 
 double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) const {
@@ -72,7 +73,7 @@ double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) con
     if (!edge.active) continue;
     const Vector3 e = edgeError(poses[edge.from], poses[edge.to], edge.measurement);
     const double s = e.dot(edge.information * e);
-    total += edge.robust ? cauchyCost(s, kernel_width) : s;
+    total += edge.robust ? robustCost(RobustKernel::kCauchy, s, kernel_width) : s;
   }
   return total;
 }
@@ -99,7 +100,8 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
       Matrix3 J_from, J_to;
       const Vector3 e =
           edgeError(poses_[edge.from], poses_[edge.to], edge.measurement, &J_from, &J_to);
-      const double w = edge.robust ? cauchyWeight(e.dot(edge.information * e), c) : 1.0;
+      const double w =
+          edge.robust ? robustWeight(RobustKernel::kCauchy, e.dot(edge.information * e), c) : 1.0;
       const Matrix3 omega = w * edge.information;
       addBlock(&triplets, edge.from, edge.from, J_from.transpose() * omega * J_from);
       addBlock(&triplets, edge.from, edge.to, J_from.transpose() * omega * J_to);
@@ -110,41 +112,24 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
     }
     Eigen::SparseMatrix<double> H(unknowns, unknowns);
     H.setFromTriplets(triplets.begin(), triplets.end());
-    const Eigen::VectorXd diagonal = H.diagonal();
     solver.analyzePattern(H);
 
     // Levenberg-Marquardt: raise the damping until a step lowers the cost.
-    bool improved = false;
-    double largest_step = 0.0;
-    for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
-      Eigen::SparseMatrix<double> damped = H;
-      for (int k = 0; k < unknowns; ++k) {
-        // A node no edge touches keeps a unit diagonal so the system stays regular.
-        damped.coeffRef(k, k) += lambda * diagonal(k) + (diagonal(k) > 0.0 ? 0.0 : 1.0);
-      }
-      solver.factorize(damped);
-      if (solver.info() != Eigen::Success) {
-        lambda = std::max(1e-6, lambda * 10.0);
-        continue;
-      }
-      const Eigen::VectorXd step = solver.solve(-b);
-      if (!step.allFinite()) break;
-      std::vector<Pose2> candidate = poses_;
-      for (int node = 1; node < nodeCount(); ++node) {
-        candidate[node] =
-            Pose2::fromVector(poses_[node].vector() + step.segment<3>(unknownIndex(node)));
-      }
-      const double new_cost = cost(candidate, c);
-      if (new_cost <= summary.final_cost) {
-        poses_ = std::move(candidate);
-        summary.final_cost = new_cost;
-        largest_step = step.cwiseAbs().maxCoeff();
-        lambda = std::max(options.initial_lambda, lambda * 0.1);
-        improved = true;
-      } else {
-        lambda = std::max(1e-6, lambda * 10.0);
-      }
-    }
+    const DampedStep step = levenbergMarquardtStep(
+        H, b, options.initial_lambda, &lambda, &solver, [&](const Eigen::VectorXd& delta) {
+          std::vector<Pose2> candidate = poses_;
+          for (int node = 1; node < nodeCount(); ++node) {
+            candidate[node] =
+                Pose2::fromVector(poses_[node].vector() + delta.segment<3>(unknownIndex(node)));
+          }
+          const double new_cost = cost(candidate, c);
+          if (new_cost > summary.final_cost) return false;
+          poses_ = std::move(candidate);
+          summary.final_cost = new_cost;
+          return true;
+        });
+    const bool improved = step.improved;
+    const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
     if (!improved || largest_step < options.convergence_step) {
       summary.converged = true;  // no step lowers the cost any more: a minimum
