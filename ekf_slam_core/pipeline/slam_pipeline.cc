@@ -84,6 +84,17 @@ Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
   return compose(filter_.pose(), between(last_odometry_, odometry));
 }
 
+// The prediction's pose block, F P Fᵀ + G Q Gᵀ, without touching the filter.
+Matrix3 SlamPipeline::deadReckonedCovariance(const Pose2& odometry) const {
+  const OdometryControl u = controlFromOdometry(last_odometry_, odometry);
+  Matrix3 F, G;
+  applyControl(filter_.pose(), u, &F, &G);
+  const Matrix3 covariance =
+      F * filter_.poseCovariance() * F.transpose() +
+      G * controlCovariance(u, filter_.options().motion_noise) * G.transpose();
+  return 0.5 * (covariance + covariance.transpose());
+}
+
 // Against the robot's raw odometry frame (what odom → base_link on tf
 // carries), also when the control is scan-matched.
 Pose2 SlamPipeline::mapToOdom() const {
@@ -115,6 +126,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     ScanRecord r;
     r.stamp = stamp;
     r.filtered = out.pose;
+    r.covariance = out.pose_covariance;
     r.odometry = odometry;
     r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
     r.odometry_at_iteration = last_odometry_;
@@ -153,9 +165,12 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
                                          : "scan stamp is not finite";
     if (!odometry.allFinite()) {
       out.pose = filter_.pose();
+      out.pose_covariance = filter_.poseCovariance();
       return out;  // no usable odometry: nothing to record against
     }
     out.pose = initialised_ ? deadReckoned(odometry) : Pose2();
+    out.pose_covariance =
+        initialised_ ? deadReckonedCovariance(odometry) : Matrix3(Matrix3::Zero());
     if (initialised_) record();
     return out;
   }
@@ -180,6 +195,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
             << last_stamp_ << " (" << dt << " s): scan not used for an update";
     out.message = message.str();
     out.pose = deadReckoned(odometry);
+    out.pose_covariance = deadReckonedCovariance(odometry);
     record();
     return out;
   }
@@ -191,6 +207,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     ++counters_.skipped_no_motion;
     out.outcome = ScanOutcome::kSkippedNoMotion;
     out.pose = deadReckoned(odometry);
+    out.pose_covariance = deadReckonedCovariance(odometry);
     record();
     return out;
   }
@@ -224,6 +241,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
       }
       out->message = message.str();
       out->pose = filter_.pose();
+      out->pose_covariance = filter_.poseCovariance();
       return;
     }
     recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
@@ -259,6 +277,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   for (double nis : out->iteration.nis) counters_.nis_sum += nis;
   out->outcome = ScanOutcome::kIterated;
   out->pose = filter_.pose();
+  out->pose_covariance = filter_.poseCovariance();
 }
 
 int SlamPipeline::pruneRarelySeen() {

@@ -82,7 +82,12 @@ const char* toString(ScanOutcome outcome);
 
 struct ScanResult {
   ScanOutcome outcome = ScanOutcome::kIterated;
-  Pose2 pose;                                  // map → base_link at the scan's stamp
+  Pose2 pose;  // map → base_link at the scan's stamp
+  // Covariance of `pose` (x, y, θ): the filter's after an iteration; between
+  // iterations the last one's carried through the motion model, as a
+  // prediction would carry it, so a dead-reckoned pose is not reported as
+  // certain as the iteration it hangs off.
+  Matrix3 pose_covariance = Matrix3::Zero();
   FeatureSet features;                         // what the extractor found (empty when not run)
   std::vector<PointObservation> observations;  // the landmark candidates used
   IterationReport iteration;                   // association, NIS, new landmarks (when iterated)
@@ -111,7 +116,8 @@ struct PipelineCounters {
 // One entry per scan, for the trajectory files and the smoother.
 struct ScanRecord {
   double stamp = 0.0;
-  Pose2 filtered;      // the pose given for the scan when it was processed
+  Pose2 filtered;                        // the pose given for the scan when it was processed
+  Matrix3 covariance = Matrix3::Zero();  // ScanResult::pose_covariance of it
   Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
   int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
   Pose2 odometry_at_iteration;  // the odometry at that iteration
@@ -170,6 +176,7 @@ class SlamPipeline {
   void iterate(double stamp, const Scan* scan, const FeatureSet* features, const Pose2& odometry,
                bool predict, double dt, ScanResult* out);
   Pose2 deadReckoned(const Pose2& odometry) const;
+  Matrix3 deadReckonedCovariance(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;

@@ -165,11 +165,29 @@ TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {
   options.min_travel_angle = 0.2;
   SlamPipeline pipeline(options);
   int iterated = 0;
+  Pose2 odometry_at_iteration;
+  double stamp_at_iteration = 0.0;
   for (int i = 0; i <= 20; ++i) {
     const Pose2 truth(0.06 * i, 0.0, 0.0);
+    const double stamp = 0.1 * i;
+    // A skipped scan's covariance is what a prediction to it would give:
+    // the last iteration's grown by the motion since (not the same as it).
+    EkfSlam predicted = pipeline.filter();
     const ScanResult r =
-        pipeline.processScan(scanAt(world, compose(truth, laser), 0.1 * i, &rng), truth);
-    if (r.outcome == ScanOutcome::kIterated) ++iterated;
+        pipeline.processScan(scanAt(world, compose(truth, laser), stamp, &rng), truth);
+    if (r.outcome == ScanOutcome::kIterated) {
+      ++iterated;
+      odometry_at_iteration = truth;
+      stamp_at_iteration = stamp;
+      EXPECT_EQ(r.pose_covariance, pipeline.filter().poseCovariance());
+    } else if (r.outcome == ScanOutcome::kSkippedNoMotion) {
+      ASSERT_EQ(predicted.predict(odometry_at_iteration, truth, stamp - stamp_at_iteration),
+                FilterStatus::kOk);
+      EXPECT_LT((r.pose_covariance - predicted.poseCovariance()).cwiseAbs().maxCoeff(), 1e-15)
+          << "scan " << i;
+      EXPECT_GT(r.pose_covariance.trace(), pipeline.filter().poseCovariance().trace());
+      EXPECT_EQ(pipeline.scans().back().covariance, r.pose_covariance);
+    }
     EXPECT_NE(r.outcome, ScanOutcome::kRejectedBadInput);
   }
   EXPECT_EQ(iterated, 6);  // the first scan, then every 4th (0.24 m) over 1.2 m

@@ -371,8 +371,9 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   geometry_msgs::PoseWithCovarianceStamped pose;
   pose.header = map_header;
   pose.pose.pose = toPoseMessage(result.pose);
-  // (x, y, yaw) of the filter into the 6×6 (x, y, z, roll, pitch, yaw) layout.
-  const Matrix3 c = pipeline_->filter().poseCovariance();
+  // (x, y, yaw) into the 6×6 (x, y, z, roll, pitch, yaw) layout; between
+  // iterations the covariance has grown with the motion since the last one.
+  const Matrix3 c = result.pose_covariance;
   const int index[3] = {0, 1, 5};
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 3; ++k) pose.pose.covariance[index[r] * 6 + index[k]] = c(r, k);
