@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
 #include <memory>
 
 namespace ekf_slam {
@@ -33,6 +34,15 @@ std::string FullSmootherOptions::validate() const {
     return "revisit_gate_probability must be in (0, 1)";
   }
   if (max_verification_rounds < 0) return "max_verification_rounds must be >= 0";
+  if (!(reassociation_position_sigma >= 0.0)) {
+    return "reassociation_position_sigma must be >= 0 (m)";
+  }
+  if (!(reassociation_heading_sigma >= 0.0)) {
+    return "reassociation_heading_sigma must be >= 0 (rad)";
+  }
+  if (!(reassociation_gate_probability > 0.0 && reassociation_gate_probability < 1.0)) {
+    return "reassociation_gate_probability must be in (0, 1)";
+  }
   return optimizer.validate();
 }
 
@@ -113,6 +123,133 @@ struct Problem {
   explicit Problem(const Pose2& laser) : graph(laser) {}
 };
 
+// A landmark of the re-association: the information-weighted mean of its
+// sightings' map positions (their observation noise only: the pose error is
+// shared by consecutive sightings and does not average out).
+struct Cluster {
+  Matrix2 information = Matrix2::Zero();
+  Vector2 information_mean = Vector2::Zero();
+  Vector2 mean = Vector2::Zero();
+  long cell = 0;
+};
+
+// Spatial hash of the clusters' means, 1 m cells.
+class ClusterGrid {
+ public:
+  static constexpr double kCell = 1.0;  // m
+  static long key(long ix, long iy) { return ix * 1000003L + iy; }
+  static long cellOf(const Vector2& p) {
+    return key(static_cast<long>(std::floor(p.x() / kCell)),
+               static_cast<long>(std::floor(p.y() / kCell)));
+  }
+  void insert(int id, long cell) { cells_[cell].push_back(id); }
+  void move(int id, long from, long to) {
+    if (from == to) return;
+    std::vector<int>& old = cells_[from];
+    old.erase(std::find(old.begin(), old.end(), id));
+    insert(id, to);
+  }
+  // Clusters in the 3 × 3 cells around p.
+  void near(const Vector2& p, std::vector<int>* out) const {
+    out->clear();
+    const long ix = static_cast<long>(std::floor(p.x() / kCell));
+    const long iy = static_cast<long>(std::floor(p.y() / kCell));
+    for (long dx = -1; dx <= 1; ++dx) {
+      for (long dy = -1; dy <= 1; ++dy) {
+        const auto it = cells_.find(key(ix + dx, iy + dy));
+        if (it != cells_.end()) out->insert(out->end(), it->second.begin(), it->second.end());
+      }
+    }
+  }
+
+ private:
+  std::unordered_map<long, std::vector<int>> cells_;
+};
+
+// Associates every sighting afresh against the map built from `poses`
+// (FullSmootherOptions::reassociate): ids[k][i] is the new landmark of
+// sighting i of iteration k, or −1 when it was left out.
+std::vector<std::vector<int>> reassociate(const std::vector<SmootherIteration>& iterations,
+                                          const std::vector<Pose2>& poses, const Pose2& laser,
+                                          const FullSmootherOptions& options, int* ambiguous) {
+  const double gate = chiSquareQuantile(options.reassociation_gate_probability, 2.0);
+  const Vector3 pose_sigma(options.reassociation_position_sigma,
+                           options.reassociation_position_sigma,
+                           options.reassociation_heading_sigma);
+  const Matrix3 pose_covariance = pose_sigma.cwiseAbs2().asDiagonal();
+  std::vector<Cluster> clusters;
+  ClusterGrid grid;
+  std::vector<std::vector<int>> ids(iterations.size());
+  std::vector<int> nearby;
+  struct Candidate {
+    double d2;
+    int sighting;
+    int cluster;
+  };
+  *ambiguous = 0;
+  for (size_t k = 0; k < iterations.size(); ++k) {
+    const std::vector<LandmarkSighting>& sightings = iterations[k].sightings;
+    const int m = static_cast<int>(sightings.size());
+    std::vector<Vector2> position(m);
+    std::vector<Matrix2> noise(m);  // observation part of the position's covariance
+    std::vector<Candidate> candidates;
+    std::vector<int> candidate_count(m, 0);
+    for (int i = 0; i < m; ++i) {
+      Matrix23 G_robot;
+      Matrix2 G_z;
+      position[i] =
+          landmarkFromObservation(poses[k], laser, sightings[i].observation.z, &G_robot, &G_z);
+      noise[i] = G_z * sightings[i].observation.covariance * G_z.transpose();
+      // The sighting and the landmark both carry the pose error here.
+      const Matrix2 pose_part = G_robot * pose_covariance * G_robot.transpose();
+      grid.near(position[i], &nearby);
+      for (int c : nearby) {
+        const Matrix2 S = noise[i] + 2.0 * pose_part + clusters[c].information.inverse();
+        const Vector2 v = position[i] - clusters[c].mean;
+        const double d2 = v.dot(S.ldlt().solve(v));
+        if (d2 <= gate) {
+          candidates.push_back({d2, i, c});
+          ++candidate_count[i];
+        }
+      }
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      return a.d2 != b.d2               ? a.d2 < b.d2
+             : a.sighting != b.sighting ? a.sighting < b.sighting
+                                        : a.cluster < b.cluster;
+    });
+    ids[k].assign(m, -1);
+    std::unordered_map<int, char> taken;
+    for (const Candidate& c : candidates) {
+      if (candidate_count[c.sighting] > 1 || ids[k][c.sighting] >= 0 || taken[c.cluster]) continue;
+      ids[k][c.sighting] = c.cluster;
+      taken[c.cluster] = 1;
+    }
+    for (int i = 0; i < m; ++i) {
+      if (candidate_count[i] > 1) {
+        ++*ambiguous;
+        continue;
+      }
+      if (ids[k][i] < 0 && candidate_count[i] == 0) {
+        ids[k][i] = static_cast<int>(clusters.size());
+        clusters.emplace_back();
+        clusters.back().cell = ClusterGrid::cellOf(position[i]);
+        grid.insert(ids[k][i], clusters.back().cell);
+      }
+      if (ids[k][i] < 0) continue;  // its only landmark took another sighting
+      Cluster& cluster = clusters[ids[k][i]];
+      const Matrix2 information = noise[i].inverse();
+      cluster.information += information;
+      cluster.information_mean += information * position[i];
+      cluster.mean = cluster.information.ldlt().solve(cluster.information_mean);
+      const long cell = ClusterGrid::cellOf(cluster.mean);
+      grid.move(ids[k][i], cluster.cell, cell);
+      cluster.cell = cell;
+    }
+  }
+  return ids;
+}
+
 }  // namespace
 
 FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
@@ -124,14 +261,25 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
   if (iterations.empty()) return result;
   const int n = static_cast<int>(iterations.size());
 
-  // Tracks per surviving landmark (merges applied).
+  const bool have_initial =
+      initial_poses != nullptr && static_cast<int>(initial_poses->size()) == n;
+  std::vector<std::vector<int>> new_ids;
+  if (have_initial && options.reassociate) {
+    new_ids = reassociate(iterations, *initial_poses, filter.options().laser_pose, options,
+                          &result.ambiguous_sightings);
+    result.reassociated = true;
+  }
+
+  // Tracks per surviving landmark (merges applied), or per new landmark.
   std::unordered_map<int, std::vector<int>> tracks_of;
   std::vector<Track> tracks;
   std::vector<int> order;  // landmark ids in order of first sighting (deterministic)
   for (int k = 0; k < n; ++k) {
     const std::vector<LandmarkSighting>& sightings = iterations[k].sightings;
     for (int i = 0; i < static_cast<int>(sightings.size()); ++i) {
-      const int id = record.survivorOf(sightings[i].landmark_id);
+      const int id =
+          result.reassociated ? new_ids[k][i] : record.survivorOf(sightings[i].landmark_id);
+      if (id < 0) continue;
       std::vector<int>& mine = tracks_of[id];
       if (mine.empty()) order.push_back(id);
       if (mine.empty() || k - tracks[mine.back()].sightings.back().first > options.revisit_gap) {
@@ -162,7 +310,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
   const bool prior_is_proper = isPositiveDefinite(record.priorCovariance());
   std::vector<Pose2> poses;
   for (const SmootherIteration& it : iterations) poses.push_back(it.filtered);
-  if (initial_poses != nullptr && static_cast<int>(initial_poses->size()) == n) {
+  if (have_initial) {
     poses = *initial_poses;
     // The filter's landmark estimates belong to the filtered poses: start
     // each landmark where its sightings put it from the new poses (the

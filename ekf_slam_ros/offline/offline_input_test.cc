@@ -64,6 +64,15 @@ TEST(SlamConfig, ShippedFileLoadsAndMatchesTheDefaults) {
             defaults.pipeline.scan_matched_motion_noise.min_rot_sigma);
   EXPECT_EQ(config.pipeline.scan_matched_motion_noise.trans_per_trans,
             defaults.pipeline.scan_matched_motion_noise.trans_per_trans);
+  const FullSmootherOptions& s = config.pipeline.smoother;
+  const FullSmootherOptions& d = defaults.pipeline.smoother;
+  EXPECT_EQ(s.observation_kernel, d.observation_kernel);
+  EXPECT_EQ(s.optimizer.max_iterations, d.optimizer.max_iterations);
+  EXPECT_EQ(s.optimizer.min_relative_decrease, d.optimizer.min_relative_decrease);
+  EXPECT_EQ(s.revisit_gap, d.revisit_gap);
+  EXPECT_EQ(s.reassociate, d.reassociate);
+  EXPECT_EQ(s.reassociation_position_sigma, d.reassociation_position_sigma);
+  EXPECT_EQ(s.reassociation_gate_probability, d.reassociation_gate_probability);
   EXPECT_FALSE(config.laser_pose_given);
 }
 
@@ -77,6 +86,7 @@ association: {method: nearest}
 mapp: {}
 map: {resolution: fine}
 scan_matching: {map_mode: everything, motion_noise: {min_rot_sigma: -0.1}}
+smoother: {observation_kernel: tukey, reassociation_gate_probability: 1.5}
 )"),
                                            &config);
   for (const char* expected :
@@ -85,7 +95,9 @@ scan_matching: {map_mode: everything, motion_noise: {min_rot_sigma: -0.1}}
         "filter.laser_pose: must be a list of 3 numbers",
         "association.method: must be one of nn, jcbb", "mapp: unknown key",
         "map.resolution: must be a number", "scan_matching.map_mode: must be one of local, global",
-        "scan_matching.motion_noise.min_rot_sigma: must be in [0,"}) {
+        "scan_matching.motion_noise.min_rot_sigma: must be in [0,",
+        "smoother.observation_kernel: must be one of none, huber, cauchy",
+        "smoother.reassociation_gate_probability: must be in"}) {
     EXPECT_NE(error.find(expected), std::string::npos) << "missing '" << expected << "' in:\n"
                                                        << error;
   }

@@ -123,11 +123,10 @@ std::string writeFilteredCovariances(const std::string& path, const ekf_slam::Sl
   if (!out) return path + ": cannot write";
   out.precision(9);
   out << "# stamp  xx xy xtheta yy ytheta thetatheta  (filtered pose covariance, m^2, m*rad, "
-         "rad^2; of the scan's iteration)\n";
-  const auto& steps = p.iterations().steps();
+         "rad^2; between iterations carried through the motion model)\n";
   for (const ekf_slam::ScanRecord& r : p.scans()) {
-    if (r.iteration < 0 || r.iteration >= static_cast<int>(steps.size())) continue;
-    const ekf_slam::Matrix3& c = steps[r.iteration].filtered_cov;
+    if (r.iteration < 0) continue;
+    const ekf_slam::Matrix3& c = r.covariance;
     char stamp[32];
     std::snprintf(stamp, sizeof(stamp), "%.6f", r.stamp);
     out << stamp << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(0, 2) << ' ' << c(1, 1) << ' '
@@ -363,7 +362,12 @@ int main(int argc, char** argv) {
          << " as seen rarely)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
-         << " landmarks, " << smoother.observation_edges << " observation edges, "
+         << " landmarks ("
+         << (smoother.reassociated
+                 ? "sightings re-associated, " + std::to_string(smoother.ambiguous_sightings) +
+                       " ambiguous left out"
+                 : std::string("the filter's associations"))
+         << "), " << smoother.observation_edges << " observation edges, "
          << smoother.constraint_edges << " loop edges, " << smoother.detached_visits
          << " revisits detached; " << smoother.summary.iterations << " iterations ("
          << (smoother.summary.converged ? "converged" : "not converged") << "), cost "

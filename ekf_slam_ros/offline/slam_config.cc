@@ -145,6 +145,31 @@ void bindAssociation(YamlBinder b, AssociationOptions* a) {
   b.rejectUnknownKeys();
 }
 
+void bindSmoother(YamlBinder b, FullSmootherOptions* s) {
+  auto kernel = [&b](const char* key, RobustKernel* k) {
+    std::string name = *k == RobustKernel::kCauchy  ? "cauchy"
+                       : *k == RobustKernel::kHuber ? "huber"
+                                                    : "none";
+    b.text(key, &name, {"none", "huber", "cauchy"});
+    *k = name == "cauchy"  ? RobustKernel::kCauchy
+         : name == "huber" ? RobustKernel::kHuber
+                           : RobustKernel::kNone;
+  };
+  kernel("observation_kernel", &s->observation_kernel);
+  kernel("loop_kernel", &s->loop_kernel);
+  b.number("kernel_width", &s->optimizer.kernel_width, 1e-3, 1000.0);
+  b.integer("max_iterations", &s->optimizer.max_iterations, 1, 100000);
+  b.number("min_relative_decrease", &s->optimizer.min_relative_decrease, 0.0, 1.0);
+  b.integer("revisit_gap", &s->revisit_gap, 1, 100000000);
+  b.number("revisit_gate_probability", &s->revisit_gate_probability, 1e-9, 1.0 - 1e-12);
+  b.integer("max_verification_rounds", &s->max_verification_rounds, 0, 100);
+  b.boolean("reassociate", &s->reassociate);
+  b.number("reassociation_position_sigma", &s->reassociation_position_sigma, 0.0, 100.0);
+  b.number("reassociation_heading_sigma", &s->reassociation_heading_sigma, 0.0, kPi);
+  b.number("reassociation_gate_probability", &s->reassociation_gate_probability, 1e-9, 1.0 - 1e-12);
+  b.rejectUnknownKeys();
+}
+
 void bindPipeline(YamlBinder b, PipelineOptions* p) {
   b.number("min_travel_distance", &p->min_travel_distance, 0.0, kHuge);
   b.number("min_travel_angle", &p->min_travel_angle, 0.0, 2 * kPi);
@@ -192,6 +217,7 @@ std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
   bindPipeline(top.child("pipeline"), &c.pipeline);
   bindScanMatching(top.child("scan_matching"), &c.pipeline);
   bindLoopClosure(top.child("loop_closure"), &c.pipeline.loop_closure);
+  bindSmoother(top.child("smoother"), &c.pipeline.smoother);
   bindMap(top.child("map"), &c.map);
   bindInput(top.child("input"), &c.input);
   top.rejectUnknownKeys();
