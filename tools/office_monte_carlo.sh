@@ -17,6 +17,7 @@ seeds=${2:-1 2 3 4 5}
 root=$(cd "$(dirname "$0")/.." && pwd)
 config=$root/config/ekf_slam_sim.yaml
 bags=()
+failed=()
 for seed in $seeds; do
   dir=$out/seed$seed
   mkdir -p "$dir"
@@ -38,15 +39,26 @@ for seed in $seeds; do
   kill -INT "$launch_pid" 2>/dev/null || true
   wait "$launch_pid" 2>/dev/null || true
   if [ $status -ne 0 ]; then
-    echo "office_monte_carlo: seed $seed did not complete (see $dir/monitor.log)" >&2
-    exit $status
+    # One seed lost (a node that died, a machine too loaded to start in
+    # time) does not void the others: it is named and left out.
+    echo "office_monte_carlo: seed $seed did not complete (see $dir/monitor.log and $dir/launch.log); left out" >&2
+    failed+=("$seed")
+    continue
   fi
   grep "average pose NEES" "$dir/report.txt" | sed "s/^/  live: /"
   bags+=(--bag "$dir/run.bag")
 done
+if [ ${#bags[@]} -eq 0 ]; then
+  echo "office_monte_carlo: no seed completed" >&2
+  exit 1
+fi
 sed 's/first_estimate_jacobians: true/first_estimate_jacobians: false/' "$config" > "$out/standard_jacobians.yaml"
 echo "== replayed with config/ekf_slam_sim.yaml"
 /usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay" --config "$config"
 echo "== the same with first_estimate_jacobians: false"
 /usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay_standard" \
   --config "$out/standard_jacobians.yaml"
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "office_monte_carlo: ${#failed[@]} seed(s) did not complete: ${failed[*]}" >&2
+  exit 1
+fi

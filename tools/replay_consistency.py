@@ -102,7 +102,7 @@ def main():
     parser.add_argument("--no-run", action="store_true")
     args = parser.parse_args()
     runner = [args.runner] if os.path.sep in args.runner else ["rosrun", "ekf_slam", args.runner]
-    total_samples, means = 0.0, []
+    inverse_samples, means = 0.0, []
     for n, bag in enumerate(args.bag):
         out = os.path.join(args.out, str(n)) if len(args.bag) > 1 else args.out
         if not args.no_run:
@@ -120,15 +120,20 @@ def main():
               (bag, mean, count, samples, band[0], band[1], "inside" if inside else "outside",
                rms[0], rms[1], rms[2]))
         means.append(mean)
-        total_samples += samples
+        inverse_samples += 1.0 / samples
     if len(means) > 1:
         pooled = sum(means) / len(means)
-        # Independent runs: the band of an average over all their samples.
-        band = sim_monitor.nees_band(3, max(1, int(round(total_samples))))
+        # Independent runs, each run's average weighted equally: run i's
+        # average of n_i independent chi-square(3) values has variance 6 / n_i,
+        # so the average over R runs has 6 / N with N = R^2 / sum(1 / n_i)
+        # (equal to the total sample count only when every n_i is the same; a
+        # run with few independent samples widens the band, as it should).
+        equivalent = len(means) ** 2 / inverse_samples
+        band = sim_monitor.nees_band(3, max(1, int(round(equivalent))))
         inside = band[0] <= pooled <= band[1]
-        print("Monte Carlo over %d runs: average pose NEES %.2f (%.0f independent samples), "
-              "95%% band %.2f..%.2f: %s" % (len(means), pooled, total_samples, band[0], band[1],
-                                            "inside" if inside else "outside"))
+        print("Monte Carlo over %d runs: average pose NEES %.2f (worth %.0f independent "
+              "samples), 95%% band %.2f..%.2f: %s" % (len(means), pooled, equivalent, band[0],
+                                                      band[1], "inside" if inside else "outside"))
 
 if __name__ == "__main__":
     main()
