@@ -36,6 +36,9 @@ std::string PipelineOptions::validate() const {
   if (!(min_travel_distance >= 0.0)) return "min_travel_distance must be >= 0 (m)";
   if (!(min_travel_angle >= 0.0)) return "min_travel_angle must be >= 0 (rad)";
   if (!(max_landmark_range > 0.0)) return "max_landmark_range must be > 0 (m)";
+  if (!(min_landmark_range >= 0.0 && min_landmark_range < max_landmark_range)) {
+    return "min_landmark_range must be >= 0 and below max_landmark_range (m)";
+  }
   if (prune_min_observations < 0) return "prune_min_observations must be >= 0";
   if (prune_age_steps < 1) return "prune_age_steps must be >= 1";
   error = scan_matching.validate();
@@ -252,7 +255,10 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
 
   out->features = scan != nullptr ? extractFeatures(*scan, options_.features) : *features;
   for (const PointFeature& point : out->features.points_of_interest) {
-    if (!point.landmark_candidate || point.range > options_.max_landmark_range) continue;
+    if (!point.landmark_candidate || point.range > options_.max_landmark_range ||
+        point.range < options_.min_landmark_range) {
+      continue;
+    }
     PointObservation obs;
     obs.z = {point.range, point.bearing};
     obs.covariance = point.range_bearing_covariance;

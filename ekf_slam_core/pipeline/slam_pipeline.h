@@ -42,6 +42,11 @@ struct PipelineOptions {
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
+  // m: nearer point features are not used either. Close by, a landmark's
+  // few centimetres of error are degrees of bearing, and the update's
+  // first-order model turns them into heading error it does not account for
+  // (docs/live_system.md, consistency). 0: no limit.
+  double min_landmark_range = 0.0;
   // Map management: a landmark matched fewer than prune_min_observations
   // times (its creation included) once prune_age_steps iterations old is
   // removed. Corners of people, chairs and doors that moved are seen a few

@@ -194,6 +194,34 @@ TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {
   EXPECT_EQ(pipeline.counters().skipped_no_motion, 15);
 }
 
+TEST(SlamPipeline, PointFeaturesOutsideTheRangeWindowAreNotUsed) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(3);
+  PipelineOptions options = defaultOptions(laser);
+  options.min_landmark_range = 2.0;
+  options.max_landmark_range = 5.0;
+  ASSERT_EQ(options.validate(), "");
+  SlamPipeline pipeline(options);
+  const ScanResult r = pipeline.processScan(scanAt(world, laser, 0.0, &rng), Pose2());
+  size_t inside = 0, outside = 0;
+  for (const PointFeature& p : r.features.points_of_interest) {
+    if (!p.landmark_candidate) continue;
+    (p.range >= 2.0 && p.range <= 5.0 ? inside : outside) += 1;
+  }
+  ASSERT_GT(inside, 0u);
+  ASSERT_GT(outside, 0u);  // the scan has candidates on both sides of the window
+  EXPECT_EQ(r.observations.size(), inside);
+  for (const PointObservation& o : r.observations) {
+    EXPECT_GE(o.z.range, 2.0);
+    EXPECT_LE(o.z.range, 5.0);
+  }
+  options.min_landmark_range = 6.0;
+  EXPECT_NE(options.validate().find("min_landmark_range"), std::string::npos);
+  options.min_landmark_range = -1.0;
+  EXPECT_NE(options.validate().find("min_landmark_range"), std::string::npos);
+}
+
 // Features extracted elsewhere (feature_node → ekf_slam_node) go through
 // exactly the iteration a scan goes through: bit-identical poses and maps.
 TEST(SlamPipeline, FeaturesInputGivesTheSameAnswerAsScans) {

@@ -174,6 +174,7 @@ void bindPipeline(YamlBinder b, PipelineOptions* p) {
   b.number("min_travel_distance", &p->min_travel_distance, 0.0, kHuge);
   b.number("min_travel_angle", &p->min_travel_angle, 0.0, 2 * kPi);
   b.number("max_landmark_range", &p->max_landmark_range, 1e-3, kHuge);
+  b.number("min_landmark_range", &p->min_landmark_range, 0.0, kHuge);
   b.integer("prune_min_observations", &p->prune_min_observations, 0, 1000000);
   b.integer("prune_age_steps", &p->prune_age_steps, 1L, 100000000L);
   std::vector<double> sigma;
