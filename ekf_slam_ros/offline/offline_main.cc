@@ -233,8 +233,11 @@ int main(int argc, char** argv) {
   std::ofstream trace_file;
   if (trace) {
     trace_file.open(out_dir + "/association_trace.txt");
-    trace_file << "# stamp  x y theta (filtered, after the scan)  range bearing  decision  "
-                  "landmark_id  d2 (Mahalanobis squared of the match or the best candidate)\n";
+    trace_file
+        << "# stamp  x y theta (filtered, after the scan)  range bearing  decision  "
+           "landmark_id  d2 (Mahalanobis squared of the match or the best candidate)  "
+           "kind (corner / front_edge)  var_range var_range_bearing var_bearing (m^2, m rad, "
+           "rad^2)\n";
     trace_file.precision(9);
   }
   for (size_t i = 0; i < total; ++i) {
@@ -242,14 +245,26 @@ int main(int argc, char** argv) {
         pipeline.processScan(log.scans[i].scan, log.scans[i].odometry);
     if (trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
       const auto& decisions = result.iteration.association.observations;
+      // The observations are the landmark candidates in range, in order.
+      std::vector<const char*> kinds;
+      for (const ekf_slam::PointFeature& p : result.features.points_of_interest) {
+        if (!p.landmark_candidate || p.range > config.pipeline.max_landmark_range ||
+            p.range < config.pipeline.min_landmark_range) {
+          continue;
+        }
+        kinds.push_back(p.kind == ekf_slam::PointKind::kCorner ? "corner" : "front_edge");
+      }
       for (size_t k = 0; k < result.observations.size() && k < decisions.size(); ++k) {
+        const ekf_slam::Matrix2& c = result.observations[k].covariance;
         char stamp[32];
         std::snprintf(stamp, sizeof(stamp), "%.6f", log.scans[i].scan.stamp);
         trace_file << stamp << ' ' << result.pose.x << ' ' << result.pose.y << ' '
                    << result.pose.theta << ' ' << result.observations[k].z.range << ' '
                    << result.observations[k].z.bearing << ' '
                    << ekf_slam::toString(decisions[k].decision) << ' ' << decisions[k].landmark_id
-                   << ' ' << decisions[k].mahalanobis2 << '\n';
+                   << ' ' << decisions[k].mahalanobis2 << ' '
+                   << (k < kinds.size() ? kinds[k] : "unknown") << ' ' << c(0, 0) << ' ' << c(0, 1)
+                   << ' ' << c(1, 1) << '\n';
       }
     }
     if (i + 1 >= next_report || i + 1 == total) {
