@@ -1,0 +1,232 @@
+#!/usr/bin/python3
+"""Where a simulated run's errors come from, measured against the truth.
+
+For recordings of the simulator (tools/office_monte_carlo.sh,
+sim_office_loop.test) and, for the sightings, their offline replays with
+--trace (ekf_slam_offline writes association_trace.txt), this prints the
+checks behind the consistency analysis in the README:
+
+  odometry   heading random walk of /odom against /ground_truth/odom, in
+             rad^2 per metre driven (windows of 0.5 m or 0.5 rad), to set
+             against filter.motion_noise.rot_per_metre; and the time shift
+             of /odom against the truth that best explains its heading
+             increments (0 when the stamps are right).
+  scans      (--scan-timing, slow: ray-casts the world image) the shift of
+             the scan stamps against the truth that best explains the
+             ranges.
+  sightings  (runs with an association_trace.txt) each matched sighting's
+             map position from the TRUE pose, against the median of its
+             landmark's sightings: mean normalised squared error per feature
+             kind and range band (2 when the covariance the filter was given
+             fits), and the correlation of consecutive sightings' whitened
+             errors (0 when they are independent).
+
+usage:
+  sim_error_sources.py --bag BAG [--run DIR] [--bag BAG2 [--run DIR2] ...]
+                       [--world config/worlds/office.yaml] [--scan-timing]
+"""
+import argparse
+import collections
+import math
+import os
+import sys
+
+import numpy as np
+import rosbag
+
+import sim_monitor
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+LASER_X = 0.16  # m, config/calibration.yaml (the simulator's mount)
+
+
+def read_poses(bag_path, topic):
+    out = []
+    with rosbag.Bag(bag_path) as bag:
+        for _, msg, _ in bag.read_messages(topics=[topic]):
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            out.append((msg.header.stamp.to_sec(), p.x, p.y, yaw))
+    out.sort()
+    return out
+
+
+def odometry_walk(pairs):
+    """(path, turn, heading-error change) per window over all bags."""
+    rows = []
+    for odom, truth in pairs:
+        samples = [(o, sim_monitor.interpolate(truth, o[0])) for o in odom]
+        samples = [(o, t) for o, t in samples if t is not None]
+        # interpolate() gives (x, y, theta)
+        error = np.unwrap([o[3] - t[2] for o, t in samples])
+        path, turn = [0.0], [0.0]
+        for (_, a), (_, b) in zip(samples, samples[1:]):
+            path.append(path[-1] + math.hypot(b[0] - a[0], b[1] - a[1]))
+            turn.append(turn[-1] + abs(sim_monitor.wrap(b[2] - a[2])))
+        i = 0
+        for j in range(1, len(samples)):
+            if path[j] - path[i] >= 0.5 or turn[j] - turn[i] >= 0.5:
+                rows.append((path[j] - path[i], turn[j] - turn[i], error[j] - error[i]))
+                i = j
+    return rows
+
+
+def odometry_shift(odom, truth, shifts):
+    """rms mismatch of 0.5 s heading increments for each shift of /odom."""
+    tt = np.array([t[0] for t in truth])
+    ty = np.unwrap([t[3] for t in truth])
+    ot = np.array([o[0] for o in odom])
+    oy = np.unwrap([o[3] for o in odom])
+    out = []
+    for shift in shifts:
+        shifted = np.interp(ot + shift, tt, ty)
+        d = (oy[5:] - oy[:-5]) - (shifted[5:] - shifted[:-5])
+        out.append(math.sqrt(float(np.mean(d * d))))
+    return out
+
+
+def scan_shift(bag_path, truth, world_yaml, shifts, every=12):
+    """Median |measured - ray-cast range| for each shift of the scan stamps."""
+    import yaml
+    sys.path.insert(0, HERE)
+    from plot_offline import read_pgm  # noqa: E402
+    with open(world_yaml) as f:
+        meta = yaml.safe_load(f)
+    pixels = read_pgm(os.path.join(os.path.dirname(world_yaml), meta["image"]))
+    occupied = (pixels < 128)[::-1, :]
+    height, width = occupied.shape
+    res = float(meta["resolution"])
+    ox, oy = meta["origin"][0], meta["origin"][1]
+    steps = np.arange(0.02, 8.0, 0.005)
+
+    def cast(x, y, angles):
+        px = x + np.outer(np.cos(angles), steps)
+        py = y + np.outer(np.sin(angles), steps)
+        ix = np.floor((px - ox) / res).astype(int)
+        iy = np.floor((py - oy) / res).astype(int)
+        inside = (ix >= 0) & (iy >= 0) & (ix < width) & (iy < height)
+        hit = np.zeros_like(inside)
+        hit[inside] = occupied[iy[inside], ix[inside]]
+        first = np.where(hit.any(1), hit.argmax(1), -1)
+        return np.where(first >= 0, steps[np.maximum(first, 0)], np.nan)
+
+    totals, count = np.zeros(len(shifts)), 0
+    with rosbag.Bag(bag_path) as bag:
+        for k, (_, msg, _) in enumerate(bag.read_messages(topics=["/scan"])):
+            if k % every:
+                continue
+            ranges = np.array(msg.ranges)
+            angles = msg.angle_min + msg.angle_increment * np.arange(len(ranges))
+            good = np.isfinite(ranges) & (ranges > 0.1) & (ranges < 7.5)
+            row = []
+            for shift in shifts:
+                pose = sim_monitor.interpolate(truth, msg.header.stamp.to_sec() + shift)
+                if pose is None:
+                    break
+                lx = pose[0] + LASER_X * math.cos(pose[2])
+                ly = pose[1] + LASER_X * math.sin(pose[2])
+                d = ranges[good] - cast(lx, ly, pose[2] + angles[good])
+                d = d[np.isfinite(d) & (np.abs(d) < 0.1)]
+                row.append(float(np.median(np.abs(d))) if len(d) else float("nan"))
+            if len(row) == len(shifts):
+                totals += np.array(row)
+                count += 1
+    return totals / max(count, 1)
+
+
+def sightings(bag_truth_runs):
+    """Normalised errors of matched sightings per (kind, range band)."""
+    bands = ((0.0, 1.0, "<1 m"), (1.0, 2.0, "1-2 m"), (2.0, 4.0, "2-4 m"), (4.0, 1e9, ">4 m"))
+    by_band = collections.defaultdict(list)
+    consecutive = collections.defaultdict(list)
+    for truth, run in bag_truth_runs:
+        per_landmark = collections.defaultdict(list)
+        with open(os.path.join(run, "association_trace.txt")) as f:
+            for line in f:
+                if line.startswith("#"):
+                    continue
+                v = line.split()
+                if len(v) < 13:
+                    raise RuntimeError("%s: association_trace.txt without the kind and covariance "
+                                       "columns (an older ekf_slam_offline)" % run)
+                if v[6] != "matched":
+                    continue
+                stamp, r, b = float(v[0]), float(v[4]), float(v[5])
+                pose = sim_monitor.interpolate(truth, stamp)
+                if pose is None:
+                    continue
+                a = pose[2] + b
+                lx = pose[0] + LASER_X * math.cos(pose[2])
+                ly = pose[1] + LASER_X * math.sin(pose[2])
+                J = np.array([[math.cos(a), -r * math.sin(a)], [math.sin(a), r * math.cos(a)]])
+                rb = np.array([[float(v[10]), float(v[11])], [float(v[11]), float(v[12])]])
+                per_landmark[int(v[7])].append(
+                    (np.array([lx + r * math.cos(a), ly + r * math.sin(a)]), J @ rb @ J.T, v[9], r))
+        for seen in per_landmark.values():
+            if len(seen) < 8:
+                continue
+            reference = np.median(np.array([s[0] for s in seen]), axis=0)
+            whitened = []
+            for position, covariance, kind, r in seen:
+                e = position - reference
+                d2 = float(e @ np.linalg.solve(covariance, e))
+                band = next(name for lo, hi, name in bands if lo <= r < hi)
+                by_band[(kind, band)].append(d2)
+                whitened.append(np.linalg.cholesky(np.linalg.inv(covariance)).T @ e)
+            for u, w in zip(whitened, whitened[1:]):
+                consecutive[seen[0][2]].append(float(u @ w) / 2.0)
+    return by_band, consecutive
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--bag", action="append", required=True)
+    parser.add_argument("--run", action="append", default=[],
+                        help="offline replay of the bag before it, made with --trace")
+    parser.add_argument("--world", default=os.path.join(HERE, "..", "config", "worlds",
+                                                        "office.yaml"))
+    parser.add_argument("--scan-timing", action="store_true")
+    args = parser.parse_args()
+    if args.run and len(args.run) != len(args.bag):
+        sys.exit("sim_error_sources: give one --run per --bag (or none)")
+
+    pairs, truths = [], []
+    for bag in args.bag:
+        truth = read_poses(bag, "/ground_truth/odom")
+        if len(truth) < 2:
+            sys.exit("sim_error_sources: %s has no /ground_truth/odom" % bag)
+        truths.append(truth)
+        pairs.append((read_poses(bag, "/odom"), truth))
+
+    rows = odometry_walk(pairs)
+    straight = [r for r in rows if r[1] < 0.05]
+    if straight:
+        rate = np.mean([r[2] ** 2 for r in straight]) / np.mean([r[0] for r in straight])
+        print("odometry: heading random walk %.2e rad^2/m over %d straight 0.5 m windows" %
+              (rate, len(straight)))
+    shifts = [-0.1, -0.05, -0.02, -0.01, 0.0, 0.01, 0.02, 0.05, 0.1]
+    mismatch = np.mean([odometry_shift(o, t, shifts) for o, t in pairs], axis=0)
+    print("odometry: stamp shift against the truth that fits best %+.2f s (rms heading-increment "
+          "mismatch %.3f deg there, %.3f deg at 0)" %
+          (shifts[int(np.argmin(mismatch))], math.degrees(mismatch.min()),
+           math.degrees(mismatch[shifts.index(0.0)])))
+    if args.scan_timing:
+        residual = np.mean([scan_shift(b, t, args.world, shifts) for b, t in zip(args.bag, truths)],
+                           axis=0)
+        print("scans: stamp shift against the truth that fits best %+.2f s (median range residual "
+              "%.4f m there, %.4f m at 0)" % (shifts[int(np.nanargmin(residual))],
+                                             np.nanmin(residual), residual[shifts.index(0.0)]))
+    if args.run:
+        by_band, consecutive = sightings(list(zip(truths, args.run)))
+        order = ["<1 m", "1-2 m", "2-4 m", ">4 m"]
+        for key in sorted(by_band, key=lambda k: (k[0], order.index(k[1]))):
+            v = by_band[key]
+            print("sightings: %-10s %-6s %6d, mean normalised squared error %.2f (2 if the "
+                  "covariance fits)" % (key[0], key[1], len(v), np.mean(v)))
+        for kind in sorted(consecutive):
+            print("sightings: %-10s consecutive whitened errors correlate %.2f (%d pairs)" %
+                  (kind, np.mean(consecutive[kind]), len(consecutive[kind])))
+
+
+if __name__ == "__main__":
+    main()
