@@ -6,8 +6,9 @@ with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
     the largest > 0.2 m);
   - average pose NEES reported with its two-sided 95 % band (computed for
     the number of independent samples the time-correlated series holds);
-    asserted only below 10 (see the comment in the test: the band is not met
-    in every run);
+    asserted only below 10 (see the comment in the test: one run's band is
+    not a sound test; the band is checked over seeds by
+    tools/office_monte_carlo.sh);
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
 and then (issue 7) replays the run's recording through offline.launch
@@ -50,12 +51,13 @@ class OfficeLoop(unittest.TestCase):
         self.assertGreater(r["odometry_max_position_error"], 0.2)
         self.assertGreater(r["odometry_mean_position_error"], 3.0 * r["mean_position_error"])
         self.assertGreater(r["odometry_max_position_error"], 3.0 * r["max_position_error"])
-        # One run's pose NEES is a weak test (its errors are correlated over
-        # the whole loop: ~5-30 independent samples), and over seeds the
-        # filter is still mildly overconfident in heading
-        # (tools/office_monte_carlo.sh: 3.84 with first-estimates
-        # Jacobians, band 2.38-3.69). That acceptance item is open
-        # (README); here only a gross regression guard, not the band.
+        # One run's pose NEES is a weak test: its errors are correlated over
+        # the whole loop (3-40 independent samples), and 4 of 16 held-out
+        # runs of a filter that is consistent over seeds lie outside their
+        # own band (tools/office_monte_carlo.sh over 25 seeds: 2.96, band
+        # 2.68-3.33; README). The band is that Monte Carlo; here the run's
+        # figure is printed with its band and guarded against a regression
+        # (a filter without min_landmark_range gave up to 26).
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)
@@ -78,7 +80,8 @@ class OfficeLoop(unittest.TestCase):
         print("full smoother / RTS / filter against the truth: %.4f / %.4f / %.4f m mean "
               "position error" % (replay["smoothed_error"], replay["rts_error"],
                                   replay["filtered_error"]))
-        self.assertLessEqual(replay["smoothed_error"], replay["filtered_error"])
+        self.assertLessEqual(replay["smoothed_error"],
+                             replay["filtered_error"] + sim_replay_test.SMOOTHED_TOLERANCE)
 
 
 if __name__ == "__main__":
