@@ -26,13 +26,7 @@ Scan cartonScan(int beams) {
   sweep.count = beams;
   sweep.max_range = 15.0;
   std::mt19937 rng(11);
-  Scan scan;
-  scan.ranges = sim::simulateRanges(world, Pose2(-0.5, 0.0, 0.0), sweep, 0.01, &rng);
-  scan.angle_min = sweep.angle_min;
-  scan.angle_increment = sweep.angle_increment;
-  scan.range_min = 0.02;
-  scan.range_max = sweep.max_range;
-  return scan;
+  return sim::simulateScan(world, Pose2(-0.5, 0.0, 0.0), sweep, 0.01, &rng, 0.02);
 }
 
 void BM_ExtractFeatures(benchmark::State& state) {

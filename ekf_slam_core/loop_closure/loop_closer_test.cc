@@ -30,13 +30,7 @@ Scan sweep(const sim::RayCaster& world, const Pose2& robot, std::mt19937* rng) {
   geometry.angle_increment = kPi / 180;
   geometry.count = 181;
   geometry.max_range = 30.0;
-  Scan scan;
-  scan.ranges = sim::simulateRanges(world, robot, geometry, 0.01, rng);
-  scan.angle_min = geometry.angle_min;
-  scan.angle_increment = geometry.angle_increment;
-  scan.range_min = 0.0;
-  scan.range_max = 30.0;
-  return scan;
+  return sim::simulateScan(world, robot, geometry, 0.01, rng);
 }
 
 std::vector<Vector2> pointsOf(const Scan& scan) {

@@ -16,13 +16,7 @@ Scan scanFrom(const sim::PolygonWorld& world, const Pose2& laser) {
   sweep.count = 361;
   sweep.angle_increment = kPi / 360;
   sweep.max_range = 8.0;
-  Scan scan;
-  scan.ranges = sim::simulateRanges(world, laser, sweep);
-  scan.angle_min = sweep.angle_min;
-  scan.angle_increment = sweep.angle_increment;
-  scan.range_min = 0.05;
-  scan.range_max = 8.0;
-  return scan;
+  return sim::simulateScan(world, laser, sweep, 0.0, nullptr, 0.05);
 }
 
 // Largest occupancy within one cell of (x, y): a wall lying exactly on a

@@ -28,12 +28,7 @@ Scan scanAt(const sim::PolygonWorld& world, const Pose2& laser_in_map, double st
             std::mt19937* rng) {
   sim::SweepGeometry sweep;  // 181 beams over ±90°
   sweep.max_range = 8.0;
-  Scan scan;
-  scan.ranges = sim::simulateRanges(world, laser_in_map, sweep, 0.01, rng);
-  scan.angle_min = sweep.angle_min;
-  scan.angle_increment = sweep.angle_increment;
-  scan.range_min = 0.05;
-  scan.range_max = 8.0;
+  Scan scan = sim::simulateScan(world, laser_in_map, sweep, 0.01, rng, 0.05);
   scan.stamp = stamp;
   return scan;
 }

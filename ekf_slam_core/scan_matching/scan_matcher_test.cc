@@ -27,13 +27,7 @@ Scan sweep(const sim::RayCaster& world, const Pose2& robot, const Pose2& laser, 
   geometry.angle_increment = kPi / 179;
   geometry.count = 180;
   geometry.max_range = 30.0;
-  Scan scan;
-  scan.ranges = sim::simulateRanges(world, compose(robot, laser), geometry, sigma, rng);
-  scan.angle_min = geometry.angle_min;
-  scan.angle_increment = geometry.angle_increment;
-  scan.range_min = 0.0;
-  scan.range_max = 30.0;
-  return scan;
+  return sim::simulateScan(world, compose(robot, laser), geometry, sigma, rng);
 }
 
 PointCloudReference referenceOf(const Scan& scan, const Pose2& pose, const Pose2& laser,

@@ -63,5 +63,16 @@ std::vector<double> simulateRanges(const RayCaster& world, const Pose2& sensor_p
   return ranges;
 }
 
+Scan simulateScan(const RayCaster& world, const Pose2& sensor_pose, const SweepGeometry& sweep,
+                  double range_sigma, std::mt19937* rng, double range_min) {
+  Scan scan;
+  scan.ranges = simulateRanges(world, sensor_pose, sweep, range_sigma, rng);
+  scan.angle_min = sweep.angle_min;
+  scan.angle_increment = sweep.angle_increment;
+  scan.range_min = range_min;
+  scan.range_max = sweep.max_range;
+  return scan;
+}
+
 }  // namespace sim
 }  // namespace ekf_slam

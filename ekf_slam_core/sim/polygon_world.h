@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/sensors/scan.h"
 #include "ekf_slam_core/sim/ray_caster.h"
 
 namespace ekf_slam {
@@ -56,6 +57,12 @@ struct SweepGeometry {
 std::vector<double> simulateRanges(const RayCaster& world, const Pose2& sensor_pose,
                                    const SweepGeometry& sweep, double range_sigma = 0.0,
                                    std::mt19937* rng = nullptr);
+
+// The same readings as a Scan: the sweep's angles, range_max = the sweep's
+// max_range (a beam that hits nothing stays +inf, "no return"), range_min as
+// given, stamp 0.
+Scan simulateScan(const RayCaster& world, const Pose2& sensor_pose, const SweepGeometry& sweep,
+                  double range_sigma = 0.0, std::mt19937* rng = nullptr, double range_min = 0.0);
 
 }  // namespace sim
 }  // namespace ekf_slam
