@@ -254,7 +254,9 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   last_stamp_ = stamp;
 
   out->features = scan != nullptr ? extractFeatures(*scan, options_.features) : *features;
-  for (const PointFeature& point : out->features.points_of_interest) {
+  const std::vector<PointFeature>& points = out->features.points_of_interest;
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    const PointFeature& point = points[i];
     if (!point.landmark_candidate || point.range > options_.max_landmark_range ||
         point.range < options_.min_landmark_range) {
       continue;
@@ -263,6 +265,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     obs.z = {point.range, point.bearing};
     obs.covariance = point.range_bearing_covariance;
     out->observations.push_back(obs);
+    out->observation_feature.push_back(i);
   }
   out->iteration.predict_status = FilterStatus::kOk;
   observe(filter_, options_.association, out->observations, &out->iteration);

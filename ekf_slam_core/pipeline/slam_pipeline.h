@@ -95,8 +95,10 @@ struct ScanResult {
   Matrix3 pose_covariance = Matrix3::Zero();
   FeatureSet features;                         // what the extractor found (empty when not run)
   std::vector<PointObservation> observations;  // the landmark candidates used
-  IterationReport iteration;                   // association, NIS, new landmarks (when iterated)
-  std::string message;                         // why a scan was not iterated, for the log
+  std::vector<int>
+      observation_feature;    // per observation: its index in features.points_of_interest
+  IterationReport iteration;  // association, NIS, new landmarks (when iterated)
+  std::string message;        // why a scan was not iterated, for the log
 };
 
 struct PipelineCounters {

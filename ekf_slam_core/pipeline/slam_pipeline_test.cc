@@ -211,6 +211,12 @@ TEST(SlamPipeline, PointFeaturesOutsideTheRangeWindowAreNotUsed) {
     EXPECT_GE(o.z.range, 2.0);
     EXPECT_LE(o.z.range, 5.0);
   }
+  ASSERT_EQ(r.observation_feature.size(), r.observations.size());
+  for (size_t k = 0; k < r.observations.size(); ++k) {
+    const PointFeature& p = r.features.points_of_interest[r.observation_feature[k]];
+    EXPECT_EQ(p.range, r.observations[k].z.range);
+    EXPECT_EQ(p.bearing, r.observations[k].z.bearing);
+  }
   options.min_landmark_range = 6.0;
   EXPECT_NE(options.validate().find("min_landmark_range"), std::string::npos);
   options.min_landmark_range = -1.0;

@@ -245,15 +245,6 @@ int main(int argc, char** argv) {
         pipeline.processScan(log.scans[i].scan, log.scans[i].odometry);
     if (trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
       const auto& decisions = result.iteration.association.observations;
-      // The observations are the landmark candidates in range, in order.
-      std::vector<const char*> kinds;
-      for (const ekf_slam::PointFeature& p : result.features.points_of_interest) {
-        if (!p.landmark_candidate || p.range > config.pipeline.max_landmark_range ||
-            p.range < config.pipeline.min_landmark_range) {
-          continue;
-        }
-        kinds.push_back(p.kind == ekf_slam::PointKind::kCorner ? "corner" : "front_edge");
-      }
       for (size_t k = 0; k < result.observations.size() && k < decisions.size(); ++k) {
         const ekf_slam::Matrix2& c = result.observations[k].covariance;
         char stamp[32];
@@ -263,8 +254,11 @@ int main(int argc, char** argv) {
                    << result.observations[k].z.bearing << ' '
                    << ekf_slam::toString(decisions[k].decision) << ' ' << decisions[k].landmark_id
                    << ' ' << decisions[k].mahalanobis2 << ' '
-                   << (k < kinds.size() ? kinds[k] : "unknown") << ' ' << c(0, 0) << ' ' << c(0, 1)
-                   << ' ' << c(1, 1) << '\n';
+                   << (result.features.points_of_interest[result.observation_feature[k]].kind ==
+                               ekf_slam::PointKind::kCorner
+                           ? "corner"
+                           : "front_edge")
+                   << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(1, 1) << '\n';
       }
     }
     if (i + 1 >= next_report || i + 1 == total) {
