@@ -300,6 +300,10 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
     // unknowns absorb its two equations exactly): left out.
     if (count < 2) continue;
     groups.push_back(mine);
+    if (have_initial) {
+      group_position.emplace_back(Vector2::Zero());  // set from the initial poses below
+      continue;
+    }
     const int slot = filter.slotOf(id);
     const auto last = record.lastEstimates().find(id);
     group_position.push_back(slot >= 0                              ? filter.landmarkPosition(slot)
