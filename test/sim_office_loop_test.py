@@ -7,8 +7,7 @@ with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
   - average pose NEES reported with its two-sided 95 % band (computed for
     the number of independent samples the time-correlated series holds);
     asserted only below 10 (see the comment in the test: one run's band is
-    not a sound test; the band is checked over seeds by
-    tools/office_monte_carlo.sh);
+    not a sound test, and over seeds the band is not met yet);
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
 and then (issue 7) replays the run's recording through offline.launch
@@ -52,12 +51,11 @@ class OfficeLoop(unittest.TestCase):
         self.assertGreater(r["odometry_mean_position_error"], 3.0 * r["mean_position_error"])
         self.assertGreater(r["odometry_max_position_error"], 3.0 * r["max_position_error"])
         # One run's pose NEES is a weak test: its errors are correlated over
-        # the whole loop (3-40 independent samples), and 4 of 16 held-out
-        # runs of a filter that is consistent over seeds lie outside their
-        # own band (tools/office_monte_carlo.sh over 25 seeds: 2.96, band
-        # 2.68-3.33; README). The band is that Monte Carlo; here the run's
-        # figure is printed with its band and guarded against a regression
-        # (a filter without min_landmark_range gave up to 26).
+        # the whole loop (3-40 independent samples), and even a filter that
+        # is consistent over seeds puts 4 of 16 runs outside their own band.
+        # Over 25 seeds (tools/office_monte_carlo.sh) the shipped
+        # configuration gives 4.74 against a band of 2.64-3.38: the item is
+        # open (README, "The pose NEES"). Here only a regression guard.
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)

@@ -38,8 +38,8 @@ STAMP_TOLERANCE = 1e-6  # s: a scan is "the same" when its stamp matches to this
 # m: "the smoother is not worse than the filter" is judged to this. On the
 # carton loop both mean errors are ~2 mm, the precision to which a pose is
 # matched to the truth at all (sim_monitor.TRUTH_SIGMA); one recording gave
-# 1.7 mm smoothed against 1.5 mm filtered (with min_landmark_range 1 m),
-# a difference the comparison does not resolve.
+# 1.7 mm smoothed against 1.5 mm filtered (with pipeline.min_landmark_range
+# 1 m), a difference the comparison does not resolve.
 SMOOTHED_TOLERANCE = 0.0005
 
 
