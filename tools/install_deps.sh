@@ -12,6 +12,10 @@ PACKAGES=(
   libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev
   libdiagnostic-updater-dev libdiagnostic-msgs-dev libtf2-msgs-dev
   ros-message-generation ros-message-runtime python3-rosbag python3-rospy
+  # the messages the Python tools and rostests import (the -dev packages
+  # above are C++ only)
+  python3-std-msgs python3-std-srvs python3-geometry-msgs python3-nav-msgs
+  python3-sensor-msgs python3-diagnostic-msgs
   # libraries
   libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
   # figures
