@@ -7,7 +7,7 @@ PACKAGES=(
   # build
   build-essential cmake pkgconf catkin clang-format
   # ROS 1 from Debian
-  ros-core-dev libroscpp-dev librosbag-dev librostest-dev python3-rostest
+  ros-core-dev libroscpp-dev librosbag-dev librostest-dev python3-rostest rosbash
   libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev
   libdiagnostic-updater-dev libdiagnostic-msgs-dev libtf2-msgs-dev
