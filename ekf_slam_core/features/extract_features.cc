@@ -10,8 +10,11 @@
 namespace ekf_slam {
 namespace {
 
-// Fills range, bearing and their covariance from position and covariance.
-bool finishPoint(PointFeature* feature) {
+// Adds the extraction's own uncertainty (options.point_model_sigma) to the
+// covariance, then fills range, bearing and their covariance.
+bool finishPoint(const FeatureOptions& options, PointFeature* feature) {
+  feature->covariance +=
+      options.point_model_sigma * options.point_model_sigma * Matrix2::Identity();
   Vector2 range_bearing;
   Matrix2 J_rb_xy;
   if (!pointToRangeBearing(feature->position, &range_bearing, &J_rb_xy)) return false;
@@ -260,7 +263,7 @@ FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options) {
     if (line_of_piece.front() >= 0) {
       PointFeature start = segmentEnd(scan, out.points, fitted.front(), /*at_start=*/true,
                                       line_of_piece.front(), options);
-      if (finishPoint(&start)) out.points_of_interest.push_back(start);
+      if (finishPoint(options, &start)) out.points_of_interest.push_back(start);
     }
     for (int k = 0; k + 1 < num_pieces; ++k) {
       const int a = line_of_piece[k], b = line_of_piece[k + 1];
@@ -284,12 +287,12 @@ FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options) {
       corner.line = a;
       corner.other_line = b;
       corner.corner_angle = angle;
-      if (finishPoint(&corner)) out.points_of_interest.push_back(corner);
+      if (finishPoint(options, &corner)) out.points_of_interest.push_back(corner);
     }
     if (line_of_piece.back() >= 0) {
       PointFeature end = segmentEnd(scan, out.points, fitted.back(), /*at_start=*/false,
                                     line_of_piece.back(), options);
-      if (finishPoint(&end)) out.points_of_interest.push_back(end);
+      if (finishPoint(options, &end)) out.points_of_interest.push_back(end);
     }
   }
   return out;

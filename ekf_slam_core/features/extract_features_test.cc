@@ -343,6 +343,39 @@ TEST(ExtractFeatures, FrontEdgeEndsAreConsistentOverViewpoints) {
   EXPECT_LT(outside, 0.01 * count);
 }
 
+// point_model_sigma widens every corner and segment end by σ² in each
+// direction of the laser frame, and nothing else: the same scan gives the
+// same points, their range–bearing covariance carries the wider one.
+TEST(ExtractFeatures, PointModelSigmaWidensEveryPointByItsVariance) {
+  const Scene scene = scenes()[2];
+  std::mt19937 rng(11);
+  const Scan scan = simulateScan(scene.world, scene.sensor, lms200(361), 0.01, 0.001, &rng);
+  FeatureOptions plain;
+  FeatureOptions widened = plain;
+  widened.point_model_sigma = 0.02;
+  const FeatureSet a = extractFeatures(scan, plain);
+  const FeatureSet b = extractFeatures(scan, widened);
+  ASSERT_EQ(a.points_of_interest.size(), b.points_of_interest.size());
+  ASSERT_GT(b.countLandmarkCandidates(), 0);
+  for (size_t i = 0; i < a.points_of_interest.size(); ++i) {
+    const PointFeature& p = a.points_of_interest[i];
+    const PointFeature& q = b.points_of_interest[i];
+    EXPECT_EQ(p.position, q.position);
+    EXPECT_EQ(p.landmark_candidate, q.landmark_candidate);
+    const Matrix2 added = q.covariance - p.covariance;
+    EXPECT_NEAR(added(0, 0), 4e-4, 1e-12);
+    EXPECT_NEAR(added(1, 1), 4e-4, 1e-12);
+    EXPECT_NEAR(added(0, 1), 0.0, 1e-12);
+    // In (r, φ) an isotropic σ² is σ² in range and σ²/r² in bearing.
+    const Matrix2 added_rb = q.range_bearing_covariance - p.range_bearing_covariance;
+    EXPECT_NEAR(added_rb(0, 0), 4e-4, 1e-10);
+    EXPECT_NEAR(added_rb(1, 1), 4e-4 / (q.range * q.range), 1e-10);
+    EXPECT_NEAR(added_rb(0, 1), 0.0, 1e-10);
+  }
+  widened.point_model_sigma = -0.01;
+  EXPECT_NE(validateFeatureOptions(widened).find("point_model_sigma"), std::string::npos);
+}
+
 TEST(ExtractFeatures, EmptyAndAllInvalidScansGiveNothingAndNoError) {
   Scan scan;
   scan.angle_min = -kPi / 2.0;

@@ -42,6 +42,7 @@ std::string validateFeatureOptions(const FeatureOptions& o) {
   check(positive(o.corner_max_distance), "corner_max_distance", "> 0 (m)", o.corner_max_distance,
         &e);
   check(nonNegative(o.endpoint_max_gap), "endpoint_max_gap", ">= 0 (m)", o.endpoint_max_gap, &e);
+  check(nonNegative(o.point_model_sigma), "point_model_sigma", ">= 0 (m)", o.point_model_sigma, &e);
   return e.str();
 }
 

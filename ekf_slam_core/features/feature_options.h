@@ -67,6 +67,15 @@ struct FeatureOptions {
   // only when the true end is pinned down to this along-line uncertainty (m):
   // the gap between the last hit and where the next beam crosses the line.
   double endpoint_max_gap = 0.3;
+  // 1σ (m), isotropic, of where the extraction puts a corner or a segment end
+  // beyond what the beam noise explains: the same physical point seen from
+  // different places lands up to a few centimetres apart (a door jamb's
+  // chamfered or rasterised corner, lines that bend near their ends), and
+  // those errors do not average out over scans from one viewpoint. Added to
+  // every point's covariance. Without it a corner seen at arm's length claims
+  // millimetres and a few such sightings make the filter's heading
+  // overconfident (README, "The pose NEES"). 0: beam noise only (thesis).
+  double point_model_sigma = 0.0;
 };
 
 // Empty when every field is usable; otherwise a message naming the first bad

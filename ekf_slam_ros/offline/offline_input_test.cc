@@ -30,7 +30,8 @@ constexpr double kIntel500TranslationThreshold = 0.025;         // m
 constexpr double kIntel500RotationThreshold = 0.6 * kPi / 180;  // rad
 
 // The simulator's file loads and differs from the defaults only where it
-// says: the motion noise (a random walk) and the control (raw odometry).
+// says: the motion noise (a random walk), the control (raw odometry) and the
+// extraction's own point uncertainty.
 TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
   SlamConfig sim, shipped;
   ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_sim.yaml", &sim), "");
@@ -38,6 +39,7 @@ TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
   EXPECT_FALSE(sim.pipeline.scan_matching.enabled);
   EXPECT_GT(sim.pipeline.filter.motion_noise.rot_per_metre, 0.0);
   EXPECT_EQ(sim.pipeline.filter.motion_noise.trans_per_trans, 0.0);
+  EXPECT_DOUBLE_EQ(sim.pipeline.features.point_model_sigma, 0.01);
   EXPECT_EQ(sim.pipeline.features.split_threshold, shipped.pipeline.features.split_threshold);
   EXPECT_EQ(sim.pipeline.association.merge_probability,
             shipped.pipeline.association.merge_probability);
@@ -87,6 +89,7 @@ mapp: {}
 map: {resolution: fine}
 scan_matching: {map_mode: everything, motion_noise: {min_rot_sigma: -0.1}}
 smoother: {observation_kernel: tukey, reassociation_gate_probability: 1.5}
+features: {point_model_sigma: -0.01}
 )"),
                                            &config);
   for (const char* expected :
@@ -97,7 +100,8 @@ smoother: {observation_kernel: tukey, reassociation_gate_probability: 1.5}
         "map.resolution: must be a number", "scan_matching.map_mode: must be one of local, global",
         "scan_matching.motion_noise.min_rot_sigma: must be in [0,",
         "smoother.observation_kernel: must be one of none, huber, cauchy",
-        "smoother.reassociation_gate_probability: must be in"}) {
+        "smoother.reassociation_gate_probability: must be in",
+        "features.point_model_sigma: must be in [0,"}) {
     EXPECT_NE(error.find(expected), std::string::npos) << "missing '" << expected << "' in:\n"
                                                        << error;
   }

@@ -29,6 +29,7 @@ void bindFeatures(YamlBinder b, FeatureOptions* f) {
   b.number("corner_min_angle", &f->corner_min_angle, 0.0, kPi / 2);
   b.number("corner_max_distance", &f->corner_max_distance, 0.0, 10.0);
   b.number("endpoint_max_gap", &f->endpoint_max_gap, 0.0, 10.0);
+  b.number("point_model_sigma", &f->point_model_sigma, 0.0, 1.0);
   b.rejectUnknownKeys();
 }
 
