@@ -17,8 +17,9 @@ usage:
       scores the runs already there
 
 Prints, per run, the average pose NEES with its 95 % band for the effective
-number of independent samples and the rms normalised error per axis (1.0
-when the filter's sigma fits its errors). With several bags (recordings
+number of independent samples, the rms normalised error per axis (1.0
+when the filter's sigma fits its errors) and the position error (mean,
+largest, final), so that a change bought with accuracy shows. With several bags (recordings
 with different noise seeds: tools/office_monte_carlo.sh) it also prints the
 Monte Carlo figure: the NEES averaged over all runs against the band for
 the runs' effective samples together. One run holds only ~5-30
@@ -77,11 +78,12 @@ def score(truth, run_dir):
     map_world = sim_monitor.inverse(
         sim_monitor.compose(sim_monitor.interpolate(truth, stamps[0]), sim_monitor.inverse(first)))
     allowance = np.diag(np.square(sim_monitor.TRUTH_SIGMA))
-    nees, normalised = [], []
+    nees, normalised, distances = [], [], []
     for s in stamps:
         est = poses[s][1:4]
         true = sim_monitor.compose(map_world, sim_monitor.interpolate(truth, s))
         e = np.array([est[0] - true[0], est[1] - true[1], sim_monitor.wrap(est[2] - true[2])])
+        distances.append(math.hypot(e[0], e[1]))
         c = covariances[s][1:]
         cov = np.array([[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]]) + allowance
         nees.append(float(e @ np.linalg.solve(cov, e)))
@@ -89,7 +91,8 @@ def score(truth, run_dir):
     samples = sim_monitor.effective_samples(nees)
     band = sim_monitor.nees_band(3, max(1, int(round(samples))))
     rms = np.sqrt(np.mean(np.square(normalised), axis=0))
-    return np.mean(nees), len(nees), samples, band, rms
+    errors = (float(np.mean(distances)), max(distances), distances[-1])
+    return np.mean(nees), len(nees), samples, band, rms, errors
 
 
 def main():
@@ -102,7 +105,7 @@ def main():
     parser.add_argument("--no-run", action="store_true")
     args = parser.parse_args()
     runner = [args.runner] if os.path.sep in args.runner else ["rosrun", "ekf_slam", args.runner]
-    inverse_samples, means = 0.0, []
+    inverse_samples, means, all_errors = 0.0, [], []
     for n, bag in enumerate(args.bag):
         out = os.path.join(args.out, str(n)) if len(args.bag) > 1 else args.out
         if not args.no_run:
@@ -113,13 +116,15 @@ def main():
             if result.returncode != 0:
                 sys.exit("replay_consistency: ekf_slam_offline failed on %s (%d):\n%s" %
                          (bag, result.returncode, result.stdout[-2000:]))
-        mean, count, samples, band, rms = score(read_truth(bag), out)
+        mean, count, samples, band, rms, errors = score(read_truth(bag), out)
         inside = band[0] <= mean <= band[1]
         print("%s: average pose NEES %.2f over %d scans (%.0f independent), 95%% band "
-              "%.2f..%.2f: %s; rms normalised error x %.2f, y %.2f, heading %.2f" %
+              "%.2f..%.2f: %s; rms normalised error x %.2f, y %.2f, heading %.2f; position "
+              "error mean %.3f m, largest %.3f m, final %.3f m" %
               (bag, mean, count, samples, band[0], band[1], "inside" if inside else "outside",
-               rms[0], rms[1], rms[2]))
+               rms[0], rms[1], rms[2], errors[0], errors[1], errors[2]))
         means.append(mean)
+        all_errors.append(errors)
         inverse_samples += 1.0 / samples
     if len(means) > 1:
         pooled = sum(means) / len(means)
@@ -134,6 +139,10 @@ def main():
         print("Monte Carlo over %d runs: average pose NEES %.2f (worth %.0f independent "
               "samples), 95%% band %.2f..%.2f: %s" % (len(means), pooled, equivalent, band[0],
                                                       band[1], "inside" if inside else "outside"))
+        print("Monte Carlo over %d runs: position error mean %.3f m (runs' means), largest %.3f m, "
+              "final at most %.3f m" % (len(means), np.mean([e[0] for e in all_errors]),
+                                        max(e[1] for e in all_errors),
+                                        max(e[2] for e in all_errors)))
 
 if __name__ == "__main__":
     main()
