@@ -3,9 +3,10 @@
 # office loop per seed through sim.launch (simulator, the real drivers on
 # pseudo-terminals, the SLAM node), each recorded to a bag, then every bag
 # replayed offline (tools/replay_consistency.py) with the simulator's SLAM
-# configuration and with the same configuration but first-estimates
-# Jacobians off, printing the pose NEES per run and averaged over the runs
-# against its 95 % band. One run's band is wide (its errors are correlated
+# configuration, with the same configuration but first-estimates Jacobians
+# off, and with it but features.point_model_sigma 0, printing the pose NEES
+# and the position error per run and averaged over the runs against its
+# 95 % band. One run's band is wide (its errors are correlated
 # over the whole loop); the average over runs is the test.
 #
 # usage: office_monte_carlo.sh OUT_DIR [SEEDS]   (default seeds: "1 2 3 4 5")
@@ -53,11 +54,15 @@ if [ ${#bags[@]} -eq 0 ]; then
   exit 1
 fi
 sed 's/first_estimate_jacobians: true/first_estimate_jacobians: false/' "$config" > "$out/standard_jacobians.yaml"
+sed 's/point_model_sigma: [0-9.]*/point_model_sigma: 0.0/' "$config" > "$out/beam_noise_only.yaml"
 echo "== replayed with config/ekf_slam_sim.yaml"
 /usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay" --config "$config"
 echo "== the same with first_estimate_jacobians: false"
 /usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay_standard" \
   --config "$out/standard_jacobians.yaml"
+echo "== the same with features.point_model_sigma: 0 (beam noise only)"
+/usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay_beam_noise_only" \
+  --config "$out/beam_noise_only.yaml"
 if [ ${#failed[@]} -gt 0 ]; then
   echo "office_monte_carlo: ${#failed[@]} seed(s) did not complete: ${failed[*]}" >&2
   exit 1
