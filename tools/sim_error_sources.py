@@ -11,19 +11,26 @@ checks behind the consistency analysis in the README:
              against filter.motion_noise.rot_per_metre; and the time shift
              of /odom against the truth that best explains its heading
              increments (0 when the stamps are right).
-  scans      (--scan-timing, slow: ray-casts the world image) the shift of
-             the scan stamps against the truth that best explains the
-             ranges.
+  scans      (--scans, slow: ray-casts the world image at the true pose)
+             the shift of the scan stamps against the truth that best
+             explains the ranges, and the bearing offset that does, on
+             straight and on turning scans (0 and 0 when the emulated
+             LMS200 and its driver are right).
   sightings  (runs with an association_trace.txt) each matched sighting's
              map position from the TRUE pose, against the median of its
              landmark's sightings: mean normalised squared error per feature
              kind and range band (2 when the covariance the filter was given
              fits), and the correlation of consecutive sightings' whitened
-             errors (0 when they are independent).
+             errors (0 when they are independent). Then the same sightings
+             against the world's true corners (the vertices of its raster,
+             within 0.1 m): median normalised squared error (1.39 for a
+             fitting covariance), mean error along and across the beam (0
+             without bias), the share more than 3 cm off at a claimed sigma
+             under 1 cm (the overconfident tail), and the lag-1 correlation.
 
 usage:
   sim_error_sources.py --bag BAG [--run DIR] [--bag BAG2 [--run DIR2] ...]
-                       [--world config/worlds/office.yaml] [--scan-timing]
+                       [--world config/worlds/office.yaml] [--scans]
 """
 import argparse
 import collections
@@ -85,53 +92,100 @@ def odometry_shift(odom, truth, shifts):
     return out
 
 
-def scan_shift(bag_path, truth, world_yaml, shifts, every=12):
-    """Median |measured - ray-cast range| for each shift of the scan stamps."""
-    import yaml
-    sys.path.insert(0, HERE)
-    from plot_offline import read_pgm  # noqa: E402
-    with open(world_yaml) as f:
-        meta = yaml.safe_load(f)
-    pixels = read_pgm(os.path.join(os.path.dirname(world_yaml), meta["image"]))
-    occupied = (pixels < 128)[::-1, :]
-    height, width = occupied.shape
-    res = float(meta["resolution"])
-    ox, oy = meta["origin"][0], meta["origin"][1]
-    steps = np.arange(0.02, 8.0, 0.005)
+class RasterWorld:
+    """The simulator's world image: occupied cells, ray casting and corners."""
 
-    def cast(x, y, angles):
-        px = x + np.outer(np.cos(angles), steps)
-        py = y + np.outer(np.sin(angles), steps)
-        ix = np.floor((px - ox) / res).astype(int)
-        iy = np.floor((py - oy) / res).astype(int)
+    def __init__(self, world_yaml):
+        import yaml
+        sys.path.insert(0, HERE)
+        from plot_offline import read_pgm  # noqa: E402  (the project's PGM reader)
+        with open(world_yaml) as f:
+            meta = yaml.safe_load(f)
+        pixels = read_pgm(os.path.join(os.path.dirname(world_yaml), meta["image"]))
+        self.occupied = (pixels < 128)[::-1, :]  # row 0 at the bottom (y = origin)
+        self.res = float(meta["resolution"])
+        self.ox, self.oy = meta["origin"][0], meta["origin"][1]
+        self.steps = np.arange(0.02, 8.0, 0.005)
+
+    def cast(self, x, y, angles):
+        """First occupied range along each angle from (x, y); nan for none within 8 m."""
+        height, width = self.occupied.shape
+        px = x + np.outer(np.cos(angles), self.steps)
+        py = y + np.outer(np.sin(angles), self.steps)
+        ix = np.floor((px - self.ox) / self.res).astype(int)
+        iy = np.floor((py - self.oy) / self.res).astype(int)
         inside = (ix >= 0) & (iy >= 0) & (ix < width) & (iy < height)
         hit = np.zeros_like(inside)
-        hit[inside] = occupied[iy[inside], ix[inside]]
+        hit[inside] = self.occupied[iy[inside], ix[inside]]
         first = np.where(hit.any(1), hit.argmax(1), -1)
-        return np.where(first >= 0, steps[np.maximum(first, 0)], np.nan)
+        return np.where(first >= 0, self.steps[np.maximum(first, 0)], np.nan)
 
-    totals, count = np.zeros(len(shifts)), 0
+    def corners(self):
+        """World positions of the raster's corners: the grid vertices where the
+        occupied region turns (one or three of the four cells around the vertex
+        occupied, or two diagonal ones). These are the points the laser really
+        sees as corners and jamb edges, 5 cm steps included."""
+        padded = np.pad(self.occupied, 1).astype(int)
+        # cells around vertex (i, j) of the grid: (i-1..i, j-1..j) in padded + 1
+        a = padded[:-1, :-1]
+        b = padded[:-1, 1:]
+        c = padded[1:, :-1]
+        d = padded[1:, 1:]
+        count = a + b + c + d
+        diagonal = (count == 2) & (a == d)
+        rows, cols = np.nonzero((count == 1) | (count == 3) | diagonal)
+        return np.column_stack((self.ox + cols * self.res, self.oy + rows * self.res))
+
+
+def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_rate=0.2):
+    """Median |measured - ray-cast range| per scan-stamp shift (s) and per
+    bearing offset (rad), ray-cast from the true pose. Returns (by shift,
+    by offset on straight scans, by offset on scans turning faster than
+    turning_rate rad/s, all of every fourth), each averaged over the scans used."""
+    by_shift, straight, turning = np.zeros(len(shifts)), np.zeros(len(offsets)), np.zeros(len(offsets))
+    counts = [0, 0, 0]
     with rosbag.Bag(bag_path) as bag:
         for k, (_, msg, _) in enumerate(bag.read_messages(topics=["/scan"])):
-            if k % every:
+            # turning scans are few: all of every fourth scan; the others every `every`
+            if k % 4:
+                continue
+            stamp = msg.header.stamp.to_sec()
+            before = sim_monitor.interpolate(truth, stamp - 0.1)
+            after = sim_monitor.interpolate(truth, stamp + 0.1)
+            if before is None or after is None:
+                continue
+            rate = abs(sim_monitor.wrap(after[2] - before[2])) / 0.2
+            if rate <= turning_rate and k % every:
                 continue
             ranges = np.array(msg.ranges)
             angles = msg.angle_min + msg.angle_increment * np.arange(len(ranges))
             good = np.isfinite(ranges) & (ranges > 0.1) & (ranges < 7.5)
-            row = []
-            for shift in shifts:
-                pose = sim_monitor.interpolate(truth, msg.header.stamp.to_sec() + shift)
+
+            def residual(shift, offset):
+                pose = sim_monitor.interpolate(truth, stamp + shift)
                 if pose is None:
-                    break
+                    return None
                 lx = pose[0] + LASER_X * math.cos(pose[2])
                 ly = pose[1] + LASER_X * math.sin(pose[2])
-                d = ranges[good] - cast(lx, ly, pose[2] + angles[good])
+                d = ranges[good] - world.cast(lx, ly, pose[2] + offset + angles[good])
                 d = d[np.isfinite(d) & (np.abs(d) < 0.1)]
-                row.append(float(np.median(np.abs(d))) if len(d) else float("nan"))
-            if len(row) == len(shifts):
-                totals += np.array(row)
-                count += 1
-    return totals / max(count, 1)
+                return float(np.median(np.abs(d))) if len(d) else None
+
+            if k % every == 0:
+                row = [residual(shift, 0.0) for shift in shifts]
+                if all(v is not None for v in row):
+                    by_shift += row
+                    counts[0] += 1
+            row = [residual(0.0, offset) for offset in offsets]
+            if all(v is not None for v in row):
+                if rate > turning_rate:
+                    turning += row
+                    counts[2] += 1
+                else:
+                    straight += row
+                    counts[1] += 1
+    return (by_shift / max(counts[0], 1), straight / max(counts[1], 1),
+            turning / max(counts[2], 1), counts)
 
 
 def sightings(bag_truth_runs):
@@ -178,6 +232,68 @@ def sightings(bag_truth_runs):
     return by_band, consecutive
 
 
+def true_corner_errors(bag_truth_runs, corners, snap=0.02):
+    """Matched sightings against the world's true raster corners. A
+    landmark's true corner is the raster corner nearest the median of its
+    sightings (from the true pose), if within snap: landmarks farther from
+    every raster corner are lines meeting across a gap (a virtual corner)
+    and are scored apart, against the median of their sightings. Per kind: each sighting's squared Mahalanobis
+    distance (its own covariance) to the true corner, its error along and
+    across the beam, whether it is more than 3 cm off at a claimed sigma
+    under 1 cm, and the correlation of consecutive sightings' whitened errors."""
+    out = collections.defaultdict(lambda: {"d2": [], "along": [], "across": [], "far": 0,
+                                           "pairs": []})
+    for truth, run in bag_truth_runs:
+        per_landmark = collections.defaultdict(list)
+        with open(os.path.join(run, "association_trace.txt")) as f:
+            for line in f:
+                if line.startswith("#"):
+                    continue
+                v = line.split()
+                if len(v) < 13 or v[6] != "matched":
+                    continue
+                stamp, r, b = float(v[0]), float(v[4]), float(v[5])
+                pose = sim_monitor.interpolate(truth, stamp)
+                if pose is None:
+                    continue
+                a = pose[2] + b
+                lx = pose[0] + LASER_X * math.cos(pose[2])
+                ly = pose[1] + LASER_X * math.sin(pose[2])
+                J = np.array([[math.cos(a), -r * math.sin(a)], [math.sin(a), r * math.cos(a)]])
+                rb = np.array([[float(v[10]), float(v[11])], [float(v[11]), float(v[12])]])
+                per_landmark[(int(v[7]), v[9])].append(
+                    (np.array([lx + r * math.cos(a), ly + r * math.sin(a)]), J @ rb @ J.T, a))
+        for (_, kind), seen in per_landmark.items():
+            median = np.median(np.array([s[0] for s in seen]), axis=0)
+            distance = np.hypot(corners[:, 0] - median[0], corners[:, 1] - median[1])
+            k = int(np.argmin(distance))
+            virtual = distance[k] > snap
+            reference = median if virtual else corners[k]
+            result = out[(kind, virtual)]
+            previous = None
+            for position, covariance, a in seen:
+                e = position - reference
+                result["d2"].append(float(e @ np.linalg.solve(covariance, e)))
+                result["along"].append(float(e @ [math.cos(a), math.sin(a)]))
+                result["across"].append(float(e @ [-math.sin(a), math.cos(a)]))
+                if np.hypot(*e) > 0.03 and math.sqrt(np.linalg.eigvalsh(covariance)[-1]) < 0.01:
+                    result["far"] += 1
+                whitened = np.linalg.cholesky(np.linalg.inv(covariance)).T @ e
+                if previous is not None:
+                    result["pairs"].append((previous, whitened))
+                previous = whitened
+    return out
+
+
+def lag_correlation(pairs):
+    """Normalised correlation of consecutive whitened errors (0: independent)."""
+    if not pairs:
+        return float("nan")
+    u = np.array([p[0] for p in pairs])
+    w = np.array([p[1] for p in pairs])
+    return float(np.sum(u * w) / math.sqrt(np.sum(u * u) * np.sum(w * w)))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--bag", action="append", required=True)
@@ -185,7 +301,9 @@ def main():
                         help="offline replay of the bag before it, made with --trace")
     parser.add_argument("--world", default=os.path.join(HERE, "..", "config", "worlds",
                                                         "office.yaml"))
-    parser.add_argument("--scan-timing", action="store_true")
+    parser.add_argument("--scans", action="store_true",
+                        help="ray-cast the world at the true pose (slow): stamp shift, bearing "
+                        "offset")
     args = parser.parse_args()
     if args.run and len(args.run) != len(args.bag):
         sys.exit("sim_error_sources: give one --run per --bag (or none)")
@@ -210,12 +328,21 @@ def main():
           "mismatch %.3f deg there, %.3f deg at 0)" %
           (shifts[int(np.argmin(mismatch))], math.degrees(mismatch.min()),
            math.degrees(mismatch[shifts.index(0.0)])))
-    if args.scan_timing:
-        residual = np.mean([scan_shift(b, t, args.world, shifts) for b, t in zip(args.bag, truths)],
-                           axis=0)
+    if args.scans:
+        world = RasterWorld(args.world)
+        offsets = [-0.004, -0.002, -0.001, 0.0, 0.001, 0.002, 0.004]
+        results = [scan_residuals(b, t, world, shifts, offsets) for b, t in zip(args.bag, truths)]
+        residual = np.mean([r[0] for r in results], axis=0)
         print("scans: stamp shift against the truth that fits best %+.2f s (median range residual "
               "%.4f m there, %.4f m at 0)" % (shifts[int(np.nanargmin(residual))],
                                              np.nanmin(residual), residual[shifts.index(0.0)]))
+        for name, column, count in (("straight", 1, 1), ("turning", 2, 2)):
+            residual = np.mean([r[column] for r in results], axis=0)
+            scans = sum(r[3][count] for r in results)
+            print("scans: bearing offset that fits best on %d %s scans %+.1f mrad (median range "
+                  "residual %.4f m there, %.4f m at 0)" %
+                  (scans, name, 1e3 * offsets[int(np.nanargmin(residual))], np.nanmin(residual),
+                   residual[offsets.index(0.0)]))
     if args.run:
         by_band, consecutive = sightings(list(zip(truths, args.run)))
         order = ["<1 m", "1-2 m", "2-4 m", ">4 m"]
@@ -223,6 +350,18 @@ def main():
             v = by_band[key]
             print("sightings: %-10s %-6s %6d, mean normalised squared error %.2f (2 if the "
                   "covariance fits)" % (key[0], key[1], len(v), np.mean(v)))
+        corners = RasterWorld(args.world).corners()
+        for (kind, virtual), r in sorted(true_corner_errors(list(zip(truths, args.run)),
+                                                            corners).items()):
+            print("sightings: %-10s %s: %d, median normalised squared "
+                  "error %.2f (1.39 if the covariance fits), mean error along the beam %+.1f mm, "
+                  "across %+.1f mm, %.2f %% more than 3 cm off at a claimed sigma under 1 cm, "
+                  "consecutive whitened errors correlate %.2f" %
+                  (kind, "of virtual corners (lines meeting across a gap), against their median"
+                   if virtual else "against the true raster corners", len(r["d2"]),
+                   np.median(r["d2"]), 1e3 * np.mean(r["along"]),
+                   1e3 * np.mean(r["across"]), 100.0 * r["far"] / len(r["d2"]),
+                   lag_correlation(r["pairs"])))
         for kind in sorted(consecutive):
             print("sightings: %-10s consecutive whitened errors correlate %.2f (%d pairs)" %
                   (kind, np.mean(consecutive[kind]), len(consecutive[kind])))
