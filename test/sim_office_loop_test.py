@@ -44,6 +44,7 @@ class OfficeLoop(unittest.TestCase):
         args.resume_after_recorder = "/office_loop_recorder"
         r = sim_monitor.run(args)  # rospy.init_node is done here
         print(sim_monitor.report_text(r))
+        self.assertFalse(r["ended_early"], r["ended_early"])
         self.assertLess(r["final_position_error"], 0.10)
         self.assertLess(r["final_heading_error_deg"], 2.0)
         # Odometry is a random walk that may end near where it started: it is

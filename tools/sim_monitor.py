@@ -5,8 +5,10 @@ office-loop rostest (test/sim_office_loop.test asserts on the same numbers).
 
 It records the SLAM pose (`pose`, map frame, with covariance), the robot's
 own odometry (`odom`) and the truth (`ground_truth/odom`, world frame) until
-the waypoint driver reports `done`, then asks the SLAM node to smooth and to
-save its landmark map, and writes into OUT:
+the waypoint driver reports `done` (or until the true robot has not moved for
+--stall-timeout seconds, a lost run: scored as it stands, named in the
+report), then asks the SLAM node to smooth and to save its landmark map, and
+writes into OUT:
   trajectory_slam.txt, trajectory_odometry.txt, trajectory_true.txt
       `stamp x y theta`, all in the SLAM map frame
   landmarks.yaml   the SLAM node's own save_map file
@@ -269,7 +271,7 @@ def report_text(r):
             r["nees_band_95"][0], r["nees_band_95"][1], 1e3 * TRUTH_SIGMA[0], 1e3 * TRUTH_SIGMA[2]),
         "landmarks: %d (%d within 0.3 m of a true corner), duplicated: %d" % (
             r["landmarks"], r["landmarks_near_true_corners"], len(r["duplicates"])),
-    ]) + "\n"
+    ] + (["ended early: " + r["ended_early"]] if r.get("ended_early") else [])) + "\n"
 
 
 def write_outputs(out, r, landmarks, world_yaml):
@@ -368,6 +370,25 @@ class Recorder:
     def _done(self, msg):
         self.done = self.done or msg.data
 
+    def stalled(self, window, distance=0.05, angle=0.1):
+        """A description when the true robot has stayed within `distance`
+        and `angle` for the last `window` seconds of data after SLAM began
+        (against a wall it was steered into, or stopped for a lost pose),
+        else None."""
+        truth = list(self.truth)
+        if not self.slam or len(truth) < 2 or truth[-1][0] - window < self.slam[0][0]:
+            return None
+        last = truth[-1]
+        for row in reversed(truth):
+            if (math.hypot(row[1] - last[1], row[2] - last[2]) > distance or
+                    abs(wrap(row[3] - last[3])) > angle):
+                return None
+            if last[0] - row[0] >= window:
+                return ("the robot has not moved for %.0f s, at (%.2f, %.2f) in the world (steered "
+                        "into a wall, or waiting for a lost pose): a lost run, scored as it stands"
+                        % (window, last[1], last[2]))
+        return None
+
     def finish(self, out):
         """Smooth, save the landmark map into `out`, return the landmarks."""
         import rospy
@@ -427,14 +448,21 @@ def run(args):
         resume_when_recording(args.resume_after_recorder, args.slam_node)
     start = time.time()
     rate = rospy.Rate(5)
+    stall_window = getattr(args, "stall_timeout", 30.0)
+    ended_early = None
     while not rospy.is_shutdown() and not recorder.done:
         if time.time() - start > args.timeout:
             raise RuntimeError("the waypoint driver did not finish within %.0f s" % args.timeout)
+        ended_early = recorder.stalled(stall_window)
+        if ended_early:
+            rospy.logwarn("sim_monitor: " + ended_early)
+            break
         rate.sleep()
     rospy.sleep(1.0)  # the last scan's pose
     landmarks = recorder.finish(args.out)
     result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
                    world_vertices(args.world))
+    result["ended_early"] = ended_early
     world_yaml = os.path.join(HERE, "..", "config", "worlds", args.world + ".yaml")
     write_outputs(args.out, result, landmarks, world_yaml)
     return result
@@ -445,6 +473,8 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--world", default="office")
     parser.add_argument("--timeout", type=float, default=600.0)
+    parser.add_argument("--stall-timeout", type=float, default=30.0,
+                        help="s without the true robot moving that end a run as lost")
     parser.add_argument("--slam-node", default="/ekf_slam")
     parser.add_argument("--resume-after-recorder", metavar="NODE",
                         help="SLAM was started paused: resume it once NODE records /scan")
