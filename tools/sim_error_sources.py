@@ -21,7 +21,9 @@ checks behind the consistency analysis in the README:
              landmark's sightings: mean normalised squared error per feature
              kind and range band (2 when the covariance the filter was given
              fits), and the correlation of consecutive sightings' whitened
-             errors (0 when they are independent). Then the same sightings
+             errors (0 when they are independent); and split by place:
+             near an object turned against the world's raster (a staircase
+             of cells) or elsewhere. Then the same sightings
              against the world's true corners (the vertices of its raster,
              within 4 cm of the median of a landmark's sightings; lines
              meeting across a gap, virtual corners, against that median):
@@ -191,10 +193,34 @@ def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_ra
             turning / max(counts[2], 1), counts)
 
 
-def sightings(bag_truth_runs):
-    """Normalised errors of matched sightings per (kind, range band)."""
+def turned_segments(world_yaml):
+    """The world's segments that are neither horizontal nor vertical (objects
+    turned against the raster), from tools/make_worlds.py; [] if unknown."""
+    sys.path.insert(0, HERE)
+    import make_worlds  # noqa: E402  (the generator of config/worlds)
+    name = os.path.splitext(os.path.basename(world_yaml))[0]
+    if not hasattr(make_worlds, name):
+        return []
+    return [(a, b) for a, b in getattr(make_worlds, name)()[0]
+            if abs(a[0] - b[0]) > 1e-9 and abs(a[1] - b[1]) > 1e-9]
+
+
+def distance_to_segments(p, segments):
+    best = float("inf")
+    for a, b in segments:
+        d = np.subtract(b, a)
+        t = min(1.0, max(0.0, float(np.dot(np.subtract(p, a), d) / np.dot(d, d))))
+        best = min(best, math.hypot(*(np.add(a, t * d) - p)))
+    return best
+
+
+def sightings(bag_truth_runs, turned=(), near=0.5):
+    """Normalised errors of matched sightings against the median of their
+    landmark's sightings: per (kind, range band), and per (kind, whether the
+    landmark lies within `near` of a turned segment)."""
     bands = ((0.0, 1.0, "<1 m"), (1.0, 2.0, "1-2 m"), (2.0, 4.0, "2-4 m"), (4.0, 1e9, ">4 m"))
     by_band = collections.defaultdict(list)
+    by_place = collections.defaultdict(list)
     consecutive = collections.defaultdict(list)
     for truth, run in bag_truth_runs:
         per_landmark = collections.defaultdict(list)
@@ -223,16 +249,18 @@ def sightings(bag_truth_runs):
             if len(seen) < 8:
                 continue
             reference = np.median(np.array([s[0] for s in seen]), axis=0)
+            at_turned = distance_to_segments(reference, turned) < near
             whitened = []
             for position, covariance, kind, r in seen:
                 e = position - reference
                 d2 = float(e @ np.linalg.solve(covariance, e))
                 band = next(name for lo, hi, name in bands if lo <= r < hi)
                 by_band[(kind, band)].append(d2)
+                by_place[(kind, at_turned)].append(d2)
                 whitened.append(np.linalg.cholesky(np.linalg.inv(covariance)).T @ e)
             for u, w in zip(whitened, whitened[1:]):
                 consecutive[seen[0][2]].append(float(u @ w) / 2.0)
-    return by_band, consecutive
+    return by_band, by_place, consecutive
 
 
 def true_corner_errors(bag_truth_runs, corners, snap=0.04):
@@ -343,12 +371,19 @@ def main():
                   (scans, name, 1e3 * offsets[int(np.nanargmin(residual))], np.nanmin(residual),
                    residual[offsets.index(0.0)]))
     if args.run:
-        by_band, consecutive = sightings(list(zip(truths, args.run)))
+        by_band, by_place, consecutive = sightings(list(zip(truths, args.run)),
+                                                   turned_segments(args.world))
         order = ["<1 m", "1-2 m", "2-4 m", ">4 m"]
         for key in sorted(by_band, key=lambda k: (k[0], order.index(k[1]))):
             v = by_band[key]
             print("sightings: %-10s %-6s %6d, mean normalised squared error %.2f (2 if the "
                   "covariance fits)" % (key[0], key[1], len(v), np.mean(v)))
+        for (kind, at_turned), v in sorted(by_place.items()):
+            v = np.array(v)
+            print("sightings: %-10s %s: %d, mean normalised squared error %.2f (2), %.2f %% beyond "
+                  "the 99.9 %% gate (0.1 %%)" %
+                  (kind, "within 0.5 m of an object turned against the raster" if at_turned
+                   else "elsewhere", len(v), np.mean(v), 100.0 * np.mean(v > GATE_999)))
         corners = RasterWorld(args.world).corners()
         for (kind, virtual), r in sorted(true_corner_errors(list(zip(truths, args.run)),
                                                             corners).items()):
