@@ -56,12 +56,19 @@ def office():
         segments.append(((a, 2), (b, 2)))
     for a, b in [(18, 16.0), (14.5, 12.0), (10.5, 8.0), (6.5, 3.0), (2.5, 2)]:
         segments.append(((a, 10), (b, 10)))
-    # Furniture: cabinets and pillars along the corridor, desks in the rooms.
-    for x, y, w, h, a in [(0.4, 6.0, 0.5, 1.2, 0), (19.5, 4.0, 0.6, 0.8, 0), (10.0, 0.35, 1.2, 0.4, 0),
-                          (7.0, 11.6, 0.8, 0.5, 0), (15.0, 11.6, 0.5, 0.5, 0.3),
-                          (4.0, 4.0, 1.2, 0.7, 0.2), (8.0, 8.0, 1.0, 0.6, -0.3),
-                          (12.0, 4.0, 0.8, 0.8, 0.6), (16.0, 8.0, 1.2, 0.6, 0)]:
-        segments += closed(box(x, y, w, h, a))
+    # Furniture: cabinets and pillars along the corridor, desks in the rooms,
+    # all square to the walls. A box turned against the 5 cm raster becomes a
+    # staircase whose corners and edges move by centimetres with the
+    # viewpoint, which no real cabinet does: their sightings were 10-50 times
+    # more often beyond the 99.9 % gate than any other's, and both loops lost
+    # among 54 noise seeds lost their heading at the one that stood turned in
+    # the top corridor (README, "The pose NEES"). Turned objects stay in the
+    # carton layout.
+    for x, y, w, h in [(0.4, 6.0, 0.5, 1.2), (19.5, 4.0, 0.6, 0.8), (10.0, 0.35, 1.2, 0.4),
+                       (7.0, 11.6, 0.8, 0.5), (15.0, 11.6, 0.5, 0.5),
+                       (4.0, 4.0, 1.2, 0.7), (8.0, 8.0, 1.0, 0.6),
+                       (12.0, 4.0, 0.8, 0.8), (16.0, 8.0, 1.2, 0.6)]:
+        segments += closed(box(x, y, w, h))
     return segments, (21.0, 13.0), (-0.5, -0.5), (1.0, 1.0, 0.0)
 
 
