@@ -51,8 +51,8 @@ class OfficeLoop(unittest.TestCase):
         # judged over the whole loop (its mean error, and its largest above
         # 0.2 m), not at the end. SLAM's largest error is printed, not held
         # to a third of odometry's: before the loop closes it can spike in
-        # some noise draws (a CI run of seed 1 without
-        # features.point_model_sigma: 0.278 m against 0.464 m).
+        # some noise draws (a CI run of seed 1 on the earlier world with a
+        # turned cabinet: 0.278 m against 0.464 m).
         self.assertGreater(r["odometry_max_position_error"], 0.2)
         self.assertGreater(r["odometry_mean_position_error"], 3.0 * r["mean_position_error"])
         # One run's pose NEES is a weak test: its errors are correlated over
