@@ -214,6 +214,33 @@ def distance_to_segments(p, segments):
     return best
 
 
+def matched_sightings(truth, run):
+    """Each matched sighting of a replay's association_trace.txt, placed in
+    the world from the TRUE pose: (landmark id, kind, position, covariance
+    (2x2, world frame), world bearing of the beam, range)."""
+    with open(os.path.join(run, "association_trace.txt")) as f:
+        for line in f:
+            if line.startswith("#"):
+                continue
+            v = line.split()
+            if len(v) < 13:
+                raise RuntimeError("%s: association_trace.txt without the kind and covariance "
+                                   "columns (an older ekf_slam_offline)" % run)
+            if v[6] != "matched":
+                continue
+            stamp, r, b = float(v[0]), float(v[4]), float(v[5])
+            pose = sim_monitor.interpolate(truth, stamp)
+            if pose is None:
+                continue
+            a = pose[2] + b
+            lx = pose[0] + LASER_X * math.cos(pose[2])
+            ly = pose[1] + LASER_X * math.sin(pose[2])
+            J = np.array([[math.cos(a), -r * math.sin(a)], [math.sin(a), r * math.cos(a)]])
+            rb = np.array([[float(v[10]), float(v[11])], [float(v[11]), float(v[12])]])
+            yield (int(v[7]), v[9], np.array([lx + r * math.cos(a), ly + r * math.sin(a)]),
+                   J @ rb @ J.T, a, r)
+
+
 def sightings(bag_truth_runs, turned=(), near=0.5):
     """Normalised errors of matched sightings against the median of their
     landmark's sightings: per (kind, range band), and per (kind, whether the
@@ -224,27 +251,8 @@ def sightings(bag_truth_runs, turned=(), near=0.5):
     consecutive = collections.defaultdict(list)
     for truth, run in bag_truth_runs:
         per_landmark = collections.defaultdict(list)
-        with open(os.path.join(run, "association_trace.txt")) as f:
-            for line in f:
-                if line.startswith("#"):
-                    continue
-                v = line.split()
-                if len(v) < 13:
-                    raise RuntimeError("%s: association_trace.txt without the kind and covariance "
-                                       "columns (an older ekf_slam_offline)" % run)
-                if v[6] != "matched":
-                    continue
-                stamp, r, b = float(v[0]), float(v[4]), float(v[5])
-                pose = sim_monitor.interpolate(truth, stamp)
-                if pose is None:
-                    continue
-                a = pose[2] + b
-                lx = pose[0] + LASER_X * math.cos(pose[2])
-                ly = pose[1] + LASER_X * math.sin(pose[2])
-                J = np.array([[math.cos(a), -r * math.sin(a)], [math.sin(a), r * math.cos(a)]])
-                rb = np.array([[float(v[10]), float(v[11])], [float(v[11]), float(v[12])]])
-                per_landmark[int(v[7])].append(
-                    (np.array([lx + r * math.cos(a), ly + r * math.sin(a)]), J @ rb @ J.T, v[9], r))
+        for landmark, kind, position, covariance, _, r in matched_sightings(truth, run):
+            per_landmark[landmark].append((position, covariance, kind, r))
         for seen in per_landmark.values():
             if len(seen) < 8:
                 continue
@@ -268,30 +276,15 @@ def true_corner_errors(bag_truth_runs, corners, snap=0.04):
     landmark's true corner is the raster corner nearest the median of its
     sightings (from the true pose), if within snap: landmarks farther from
     every raster corner are lines meeting across a gap (a virtual corner)
-    and are scored apart, against the median of their sightings. Per kind: each sighting's squared Mahalanobis
-    distance (its own covariance) to the true corner, its error along and
-    across the beam, and the correlation of consecutive sightings' whitened errors."""
+    and are scored apart, against the median of their sightings. Per kind:
+    each sighting's squared Mahalanobis distance (its own covariance) to the
+    true corner, its error along and across the beam, and the correlation
+    of consecutive sightings' whitened errors."""
     out = collections.defaultdict(lambda: {"d2": [], "along": [], "across": [], "pairs": []})
     for truth, run in bag_truth_runs:
         per_landmark = collections.defaultdict(list)
-        with open(os.path.join(run, "association_trace.txt")) as f:
-            for line in f:
-                if line.startswith("#"):
-                    continue
-                v = line.split()
-                if len(v) < 13 or v[6] != "matched":
-                    continue
-                stamp, r, b = float(v[0]), float(v[4]), float(v[5])
-                pose = sim_monitor.interpolate(truth, stamp)
-                if pose is None:
-                    continue
-                a = pose[2] + b
-                lx = pose[0] + LASER_X * math.cos(pose[2])
-                ly = pose[1] + LASER_X * math.sin(pose[2])
-                J = np.array([[math.cos(a), -r * math.sin(a)], [math.sin(a), r * math.cos(a)]])
-                rb = np.array([[float(v[10]), float(v[11])], [float(v[11]), float(v[12])]])
-                per_landmark[(int(v[7]), v[9])].append(
-                    (np.array([lx + r * math.cos(a), ly + r * math.sin(a)]), J @ rb @ J.T, a))
+        for landmark, kind, position, covariance, a, _ in matched_sightings(truth, run):
+            per_landmark[(landmark, kind)].append((position, covariance, a))
         for (_, kind), seen in per_landmark.items():
             median = np.median(np.array([s[0] for s in seen]), axis=0)
             distance = np.hypot(corners[:, 0] - median[0], corners[:, 1] - median[1])
