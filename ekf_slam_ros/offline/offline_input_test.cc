@@ -40,8 +40,7 @@ TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
   EXPECT_FALSE(sim.pipeline.scan_matching.enabled);
   EXPECT_GT(sim.pipeline.filter.motion_noise.rot_per_metre, 0.0);
   EXPECT_EQ(sim.pipeline.filter.motion_noise.trans_per_trans, 0.0);
-  EXPECT_EQ(sim.pipeline.features.point_model_sigma,
-            shipped.pipeline.features.point_model_sigma);
+  EXPECT_EQ(sim.pipeline.features.point_model_sigma, shipped.pipeline.features.point_model_sigma);
   EXPECT_EQ(sim.pipeline.features.split_threshold, shipped.pipeline.features.split_threshold);
   EXPECT_EQ(sim.pipeline.association.merge_probability,
             shipped.pipeline.association.merge_probability);
