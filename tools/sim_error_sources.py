@@ -101,15 +101,7 @@ class RasterWorld:
     """The simulator's world image: occupied cells, ray casting and corners."""
 
     def __init__(self, world_yaml):
-        import yaml
-        sys.path.insert(0, HERE)
-        from plot_offline import read_pgm  # noqa: E402  (the project's PGM reader)
-        with open(world_yaml) as f:
-            meta = yaml.safe_load(f)
-        pixels = read_pgm(os.path.join(os.path.dirname(world_yaml), meta["image"]))
-        self.occupied = (pixels < 128)[::-1, :]  # row 0 at the bottom (y = origin)
-        self.res = float(meta["resolution"])
-        self.ox, self.oy = meta["origin"][0], meta["origin"][1]
+        self.occupied, self.res, self.ox, self.oy = sim_monitor.read_world_grid(world_yaml)
         self.steps = np.arange(0.02, 8.0, 0.005)
 
     def cast(self, x, y, angles):
@@ -166,7 +158,14 @@ def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_ra
             angles = msg.angle_min + msg.angle_increment * np.arange(len(ranges))
             good = np.isfinite(ranges) & (ranges > 0.1) & (ranges < 7.5)
 
+            cache = {}
+
             def residual(shift, offset):
+                if (shift, offset) not in cache:
+                    cache[(shift, offset)] = cast_residual(shift, offset)
+                return cache[(shift, offset)]
+
+            def cast_residual(shift, offset):
                 pose = sim_monitor.interpolate(truth, stamp + shift)
                 if pose is None:
                     return None
@@ -348,8 +347,8 @@ def main():
           "mismatch %.3f deg there, %.3f deg at 0)" %
           (shifts[int(np.argmin(mismatch))], math.degrees(mismatch.min()),
            math.degrees(mismatch[shifts.index(0.0)])))
+    world = RasterWorld(args.world) if args.scans or args.run else None
     if args.scans:
-        world = RasterWorld(args.world)
         offsets = [-0.004, -0.002, -0.001, 0.0, 0.001, 0.002, 0.004]
         results = [scan_residuals(b, t, world, shifts, offsets) for b, t in zip(args.bag, truths)]
         residual = np.mean([r[0] for r in results], axis=0)
@@ -377,7 +376,7 @@ def main():
                   "the 99.9 %% gate (0.1 %%)" %
                   (kind, "within 0.5 m of an object turned against the raster" if at_turned
                    else "elsewhere", len(v), np.mean(v), 100.0 * np.mean(v > GATE_999)))
-        corners = RasterWorld(args.world).corners()
+        corners = world.corners()
         for (kind, virtual), r in sorted(true_corner_errors(list(zip(truths, args.run)),
                                                             corners).items()):
             d2 = np.array(r["d2"])

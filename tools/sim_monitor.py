@@ -132,21 +132,24 @@ def world_vertices(world):
     return sorted(vertices)
 
 
-def read_world_image(yaml_path):
-    """Occupied cell centres (world frame) of a map_server world."""
+def read_world_grid(yaml_path):
+    """A map_server world as (occupied, resolution, origin x, origin y):
+    occupied[row, col] is True for a wall cell, row 0 at the bottom (y =
+    origin y), so cell (row, col) spans x = ox + col * res, y = oy + row * res."""
     import yaml
     with open(yaml_path) as f:
         meta = yaml.safe_load(f)
     sys.path.insert(0, HERE)
     from plot_offline import read_pgm  # noqa: E402  (the project's PGM reader)
     pixels = read_pgm(os.path.join(os.path.dirname(yaml_path), meta["image"]))
-    height = pixels.shape[0]
-    res = float(meta["resolution"])
-    ox, oy = meta["origin"][0], meta["origin"][1]
-    rows, cols = np.nonzero(pixels < 128)
-    xs = ox + (cols + 0.5) * res
-    ys = oy + (height - 1 - rows + 0.5) * res
-    return xs, ys
+    return (pixels < 128)[::-1, :], float(meta["resolution"]), meta["origin"][0], meta["origin"][1]
+
+
+def read_world_image(yaml_path):
+    """Occupied cell centres (world frame) of a map_server world."""
+    occupied, res, ox, oy = read_world_grid(yaml_path)
+    rows, cols = np.nonzero(occupied)
+    return ox + (cols + 0.5) * res, oy + (rows + 0.5) * res
 
 
 # --- scoring ------------------------------------------------------------------
