@@ -307,6 +307,12 @@ void LoopCloser::finish() {
   if (dropped > 0) optimise();
 }
 
+Pose2 LoopCloser::latestPose() const {
+  if (scans_.empty()) return Pose2();
+  const ScanEntry& s = scans_.back();
+  return s.key >= 0 ? compose(graph_.pose(s.key), s.offset) : s.offset;
+}
+
 std::vector<StampedPose> LoopCloser::scanPoses() const {
   std::vector<StampedPose> out;
   out.reserve(scans_.size());

@@ -105,6 +105,10 @@ class LoopCloser {
 
   // One pose per scan given to addScan, in the map frame of the first key scan.
   std::vector<StampedPose> scanPoses() const;
+  // The pose of the latest scan given to addScan, from the graph as it
+  // stands now (after any optimisation that scan triggered): the causal,
+  // loop-closed estimate. Same frame as scanPoses().
+  Pose2 latestPose() const;
 
   const LoopClosureCounters& counters() const { return counters_; }
   const PoseGraph& graph() const { return graph_; }

@@ -91,6 +91,8 @@ TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
 
 struct LoopRun {
   std::vector<Pose2> truth, front_end, closed;
+  std::vector<Pose2> causal;      // latestPose() right after each scan
+  std::vector<long> accepted_by;  // loops accepted up to each scan
   LoopClosureCounters counters;
 };
 
@@ -112,6 +114,8 @@ LoopRun runTwoLaps(bool enabled) {
     }
     run.front_end.push_back(front_end);
     closer.addScan(0.1 * i, sweep(world, run.truth[i], &rng), Pose2(), front_end, true);
+    run.causal.push_back(closer.latestPose());
+    run.accepted_by.push_back(closer.counters().accepted);
   }
   closer.finish();
   for (const StampedPose& p : closer.scanPoses()) run.closed.push_back(p.pose);
@@ -134,6 +138,32 @@ TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {
     worst = std::max(worst, positionError(run.closed[i], run.truth[i]));
   }
   EXPECT_LT(worst, 0.4);
+}
+
+// The causal estimate (what a live node publishes at each scan) is the front
+// end's until the first loop is accepted; from then on it follows the
+// loop-closed graph, so the robot's pose at the end of the second lap is
+// centimetres from the truth while the front end is metres off.
+TEST(LoopCloser, CausalPoseFollowsTheFrontEndUntilTheFirstLoopThenTheClosedGraph) {
+  const LoopRun run = runTwoLaps(/*enabled=*/true);
+  ASSERT_EQ(run.causal.size(), run.truth.size());
+  size_t first_loop = run.causal.size();
+  for (size_t i = 0; i < run.causal.size(); ++i) {
+    if (run.accepted_by[i] > 0) {
+      first_loop = i;
+      break;
+    }
+    EXPECT_LT(maxAbsDifference(run.causal[i], run.front_end[i]), 1e-9) << "scan " << i;
+  }
+  ASSERT_LT(first_loop, run.causal.size());
+  EXPECT_LT(positionError(run.causal.back(), run.truth.back()), 0.2);
+  EXPECT_GT(positionError(run.front_end.back(), run.truth.back()), 1.5);
+  double causal_error = 0.0, front_end_error = 0.0;
+  for (size_t i = first_loop; i < run.causal.size(); ++i) {
+    causal_error += positionError(run.causal[i], run.truth[i]);
+    front_end_error += positionError(run.front_end[i], run.truth[i]);
+  }
+  EXPECT_LT(causal_error, 0.25 * front_end_error);
 }
 
 TEST(LoopCloser, DisabledKeepsTheFrontEndTrajectory) {

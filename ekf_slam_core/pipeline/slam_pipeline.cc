@@ -74,7 +74,8 @@ FilterOptions filterOptionsFor(const PipelineOptions& options) {
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
     : options_(options),
       scan_matcher_(options.scan_matching.enabled
-                        ? std::make_unique<ScanMatchingOdometry>(options.scan_matching)
+                        ? std::make_unique<ScanMatchingOdometry>(options.scan_matching,
+                                                                 options.filter.motion_noise)
                         : nullptr),
       loop_closer_(options.loop_closure.enabled
                        ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
@@ -133,6 +134,15 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     r.odometry = odometry;
     r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
     r.odometry_at_iteration = last_odometry_;
+    r.causal = out.pose;
+    if (loop_closer_ && scan != nullptr) {
+      const Pose2 graph_pose = loop_closer_->latestPose();
+      if (!have_map_from_graph_) {
+        map_from_graph_ = compose(out.pose, inverse(graph_pose));
+        have_map_from_graph_ = true;
+      }
+      r.causal = compose(map_from_graph_, graph_pose);
+    }
     records_.push_back(r);
   };
 
@@ -155,6 +165,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
         ++counters_.scan_matches;
       } else {
         ++counters_.scan_match_refusals;
+        counters_.scan_match_odometry_refusals = scan_matcher_->counters().refused_by_odometry;
       }
     } else {
       odometry = scan_matcher_->deadReckon(raw_odometry);
@@ -306,6 +317,13 @@ std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
   std::vector<StampedPose> out;
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) out.push_back({r.stamp, r.filtered});
+  return out;
+}
+
+std::vector<StampedPose> SlamPipeline::causalScanPoses() const {
+  std::vector<StampedPose> out;
+  out.reserve(records_.size());
+  for (const ScanRecord& r : records_) out.push_back({r.stamp, r.causal});
   return out;
 }
 

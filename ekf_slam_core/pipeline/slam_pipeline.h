@@ -113,11 +113,12 @@ struct PipelineCounters {
   long matches = 0;
   long ambiguous = 0;  // between the gates, or lost to a better observation
   long new_landmarks = 0;
-  long pruned = 0;               // tentative landmarks removed
-  long pruned_rare = 0;          // landmarks removed by prune_min_observations
-  long scan_matches = 0;         // scans aligned by the scan matcher
-  long scan_match_refusals = 0;  // scans that fell back to the odometry increment
-  double nis_sum = 0.0;          // over all matches
+  long pruned = 0;                        // tentative landmarks removed
+  long pruned_rare = 0;                   // landmarks removed by prune_min_observations
+  long scan_matches = 0;                  // scans aligned by the scan matcher
+  long scan_match_refusals = 0;           // scans that fell back to the odometry increment
+  long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
+  double nis_sum = 0.0;                   // over all matches
 };
 
 // One entry per scan, for the trajectory files and the smoother.
@@ -128,6 +129,11 @@ struct ScanRecord {
   Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
   int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
   Pose2 odometry_at_iteration;  // the odometry at that iteration
+  // The causal estimate given for the scan when it was processed: with loop
+  // closure on, the back end's loop-closed graph as it stood after this
+  // scan (corrections take effect at the scan whose key scan produced
+  // them), in the map frame; otherwise the filtered pose.
+  Pose2 causal;
 };
 
 class SlamPipeline {
@@ -167,6 +173,8 @@ class SlamPipeline {
   // The same from the thesis's RTS smoother over the pose alone (§3.4.5.1).
   std::vector<StampedPose> rtsScanPoses() const;
   std::vector<StampedPose> filteredScanPoses() const;
+  // ScanRecord::causal for every scan: what a live run publishes.
+  std::vector<StampedPose> causalScanPoses() const;
 
   // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
   // the final optimisation after the last scan; optimizedScanPoses() then
@@ -196,6 +204,8 @@ class SlamPipeline {
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;
   std::vector<int> record_of_loop_scan_;  // records_ index of each scan given to the loop closer
+  bool have_map_from_graph_ = false;      // map_from_graph_ is set (at the first recorded scan)
+  Pose2 map_from_graph_;                  // the loop closer's frame in the map frame
   PipelineCounters counters_;
   std::vector<ScanRecord> records_;
   bool initialised_ = false;

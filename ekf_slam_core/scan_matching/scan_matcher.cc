@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "ekf_slam_core/filter/chi_square.h"
+
 namespace ekf_slam {
 
 std::string ScanMatcherOptions::validate() const {
@@ -34,6 +36,15 @@ std::string ScanMatcherOptions::validate() const {
   if (local_map_scans < 1) return "local_map_scans must be >= 1";
   if (!(keyscan_distance >= 0.0)) return "keyscan_distance must be >= 0 (m)";
   if (!(keyscan_angle >= 0.0)) return "keyscan_angle must be >= 0 (rad)";
+  if (!(odometry_gate_probability >= 0.0 && odometry_gate_probability < 1.0)) {
+    return "odometry_gate_probability must be in [0, 1)";
+  }
+  if (!(odometry_check_sigma_translation > 0.0)) {
+    return "odometry_check_sigma_translation must be > 0 (m)";
+  }
+  if (!(odometry_check_sigma_rotation > 0.0)) {
+    return "odometry_check_sigma_rotation must be > 0 (rad)";
+  }
   return "";
 }
 
@@ -241,6 +252,30 @@ std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser
 // ---------------------------------------------------------------------------
 // Scan-matched odometry
 
+ScanMatchingOdometry::ScanMatchingOdometry(const ScanMatcherOptions& options,
+                                           const MotionNoiseOptions& wheel_noise)
+    : options_(options),
+      wheel_noise_(wheel_noise),
+      odometry_gate_(options.odometry_gate_probability > 0.0
+                         ? chiSquareQuantile(options.odometry_gate_probability, 3.0)
+                         : 0.0) {}
+
+double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry,
+                                                  const Pose2& matched) const {
+  // Both increments in the frame of the last corrected pose; the odometry
+  // increment's covariance from the control (rot1, trans, rot2) through G.
+  const OdometryControl u = controlFromOdometry(last_raw_, raw_odometry);
+  Matrix3 G;
+  const Pose2 wheels = applyControl(Pose2(), u, nullptr, &G);
+  const Pose2 laser = between(last_corrected_, matched);
+  Vector3 d(laser.x - wheels.x, laser.y - wheels.y, wrapAngle(laser.theta - wheels.theta));
+  Matrix3 covariance = G * controlCovariance(u, wheel_noise_) * G.transpose();
+  const double st = options_.odometry_check_sigma_translation;
+  const double sr = options_.odometry_check_sigma_rotation;
+  covariance += Vector3(st * st, st * st, sr * sr).asDiagonal().toDenseMatrix();
+  return d.dot(covariance.ldlt().solve(d));
+}
+
 void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const Pose2& pose) {
   std::vector<Vector2> placed;
   placed.reserve(points.size());
@@ -302,6 +337,19 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
         << radToDeg(correction.theta) << " deg) beyond max_correction_*";
       match.ok = false;
       match.message = m.str();
+    } else if (odometry_gate_ > 0.0) {
+      const double d2 = odometryDisagreement(raw_odometry, match.pose);
+      if (d2 > odometry_gate_) {
+        std::ostringstream m;
+        m << "match disagrees with the wheels: squared Mahalanobis distance " << d2
+          << " beyond the gate " << odometry_gate_ << " (correction " << correction.x << " m, "
+          << correction.y << " m, " << radToDeg(correction.theta) << " deg)";
+        match.ok = false;
+        match.message = m.str();
+        ++counters_.refused_by_odometry;
+      } else {
+        corrected = match.pose;
+      }
     } else {
       corrected = match.pose;
     }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/models/odometry_motion_model.h"
 #include "ekf_slam_core/sensors/scan.h"
 
 namespace ekf_slam {
@@ -62,6 +63,19 @@ struct ScanMatcherOptions {
   int local_map_scans = 8;          // key scans kept as the reference (local mode)
   double keyscan_distance = 0.15;   // m of travel before the scan joins the reference …
   double keyscan_angle = 0.1;       // rad … or this much turn
+  // Check against the wheels. The match's increment since the last scan is
+  // compared with the odometry increment: their difference d, against the
+  // odometry increment's covariance Σ (the wheel noise model, G Q Gᵀ) plus
+  // the floors below (time stamping and the matcher's own jitter), must pass
+  // dᵀ Σ⁻¹ d ≤ χ²₃(odometry_gate_probability). A match that fails is refused
+  // (counted) and the odometry increment is used, so a match that would move
+  // the robot where its wheels say it cannot have gone never enters.
+  // The floors make it a test for gross errors only: beyond the wheel model,
+  // a scan's match may differ from the odometry by about 4 floors (20 cm,
+  // 12 deg) before it is refused.
+  double odometry_gate_probability = 0.999;        // 0: no check
+  double odometry_check_sigma_translation = 0.05;  // m, floor per scan (1 sigma)
+  double odometry_check_sigma_rotation = 0.0524;   // rad, floor per scan (1 sigma, 3 deg)
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -118,7 +132,8 @@ std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser
 
 struct ScanMatcherCounters {
   long matched = 0;
-  long refused = 0;  // fell back to the odometry increment
+  long refused = 0;              // fell back to the odometry increment (every reason)
+  long refused_by_odometry = 0;  // of those, refused by the check against the wheels
   long key_scans = 0;
 };
 
@@ -129,7 +144,10 @@ struct ScanMatcherCounters {
 // the output is never worse than dead reckoning by more than one refusal.
 class ScanMatchingOdometry {
  public:
-  explicit ScanMatchingOdometry(const ScanMatcherOptions& options) : options_(options) {}
+  // `wheel_noise`: the noise model of the raw odometry increment, for the
+  // check against the wheels (the filter's motion noise in the thesis's mode).
+  explicit ScanMatchingOdometry(const ScanMatcherOptions& options,
+                                const MotionNoiseOptions& wheel_noise = MotionNoiseOptions());
 
   // Corrected odom → base_link for this scan. `laser_pose` is base_link → laser.
   Pose2 process(const Scan& scan, const Pose2& raw_odometry, const Pose2& laser_pose,
@@ -147,8 +165,13 @@ class ScanMatchingOdometry {
  private:
   void addKeyScan(const std::vector<Vector2>& points, const Pose2& pose);
   bool globalMap() const { return options_.map_mode == "global"; }
+  // Squared Mahalanobis distance between the matched and the odometry
+  // increments (both from the last scan), under the wheel noise.
+  double odometryDisagreement(const Pose2& raw_odometry, const Pose2& matched) const;
 
   ScanMatcherOptions options_;
+  MotionNoiseOptions wheel_noise_;
+  double odometry_gate_ = 0.0;  // χ²₃ quantile; 0: no check
   ScanMatcherCounters counters_;
   bool initialised_ = false;
   int consecutive_refusals_ = 0;

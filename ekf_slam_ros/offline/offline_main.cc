@@ -39,7 +39,9 @@ using ekf_slam::Pose2;
 
 void usage() {
   std::cerr << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
-               "                        [--max-scans N] [--no-figures] [--trace]\n";
+               "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
+               "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
+               "             no figures): the fastest run, for scoring trajectories\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -154,6 +156,7 @@ int main(int argc, char** argv) {
   std::string bag_path, carmen_path, out_dir, config_path;
   long max_scans = -1;
   bool figures = true;
+  bool maps = true;
   bool trace = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -171,6 +174,9 @@ int main(int argc, char** argv) {
       max_scans = std::atol(argv[++i]);
     } else if (arg == "--no-figures") {
       figures = false;
+    } else if (arg == "--no-maps") {
+      maps = false;
+      figures = false;  // the figures draw the maps
     } else if (arg == "--trace") {
       trace = true;
     } else {
@@ -284,6 +290,10 @@ int main(int argc, char** argv) {
   std::string error = ekf_slam::writeTrajectory(out_dir + "/trajectory_filtered.txt", filtered);
   if (error.empty())
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_smoothed.txt", smoothed);
+  // What a live run publishes for each scan at that scan's time.
+  if (error.empty()) {
+    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_live.txt", pipeline.causalScanPoses());
+  }
   if (error.empty()) error = ekf_slam::writeTrajectory(out_dir + "/trajectory_rts.txt", rts);
   if (error.empty())
     error = ekf_slam::writeTrajectory(out_dir + "/trajectory_odometry.txt", odometry);
@@ -309,11 +319,13 @@ int main(int argc, char** argv) {
                                 config.pipeline.filter.laser_pose);
   }
   const Pose2 laser = config.pipeline.filter.laser_pose;
-  if (error.empty()) error = buildMap(config.map, log, final_poses, laser).save(out_dir + "/map");
-  if (error.empty()) {
+  if (maps && error.empty()) {
+    error = buildMap(config.map, log, final_poses, laser).save(out_dir + "/map");
+  }
+  if (maps && error.empty()) {
     error = buildMap(config.map, log, filtered, laser).save(out_dir + "/map_filtered");
   }
-  if (error.empty()) {
+  if (maps && error.empty()) {
     error = buildMap(config.map, log, odometry, laser).save(out_dir + "/map_odometry");
   }
   if (!error.empty()) {
@@ -358,7 +370,9 @@ int main(int argc, char** argv) {
          << (config.pipeline.scan_matching.enabled
                  ? std::to_string(c.scan_matches) + " scans matched, " +
                        std::to_string(c.scan_match_refusals) +
-                       " fell back to the odometry increment"
+                       " fell back to the odometry increment (" +
+                       std::to_string(c.scan_match_odometry_refusals) +
+                       " of them disagreed with the wheels)"
                  : std::string("off (raw odometry is the control)"))
          << "\n"
          << "loop closure: " << loopClosureLine(pipeline.loopCloser()) << "\n"

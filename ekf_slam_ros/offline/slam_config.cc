@@ -84,6 +84,9 @@ void bindScanMatching(YamlBinder b, PipelineOptions* p) {
   b.integer("local_map_scans", &s.local_map_scans, 1, 10000);
   b.number("keyscan_distance", &s.keyscan_distance, 0.0, kHuge);
   b.number("keyscan_angle", &s.keyscan_angle, 0.0, 2 * kPi);
+  b.number("odometry_gate_probability", &s.odometry_gate_probability, 0.0, 0.999999999);
+  b.number("odometry_check_sigma_translation", &s.odometry_check_sigma_translation, 1e-6, kHuge);
+  b.number("odometry_check_sigma_rotation", &s.odometry_check_sigma_rotation, 1e-6, 2 * kPi);
   bindMotionNoise(b.child("motion_noise"), &p->scan_matched_motion_noise);
   b.rejectUnknownKeys();
 }
