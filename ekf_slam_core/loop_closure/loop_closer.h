@@ -41,7 +41,9 @@
 namespace ekf_slam {
 
 struct LoopClosureOptions {
-  bool enabled = false;           // config/ekf_slam.yaml turns it on for real logs
+  // false: the pipeline runs no back end (a LoopCloser built disabled keeps
+  // its key scans but searches no loop).
+  bool enabled = true;
   double keyscan_distance = 0.4;  // m of front-end travel between key scans …
   double keyscan_angle = 0.35;    // rad … or this much turn (20 deg)
   double max_range = 15.0;        // m: farther readings are not kept in key scans

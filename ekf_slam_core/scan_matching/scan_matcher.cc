@@ -45,6 +45,7 @@ std::string ScanMatcherOptions::validate() const {
   if (!(odometry_check_sigma_rotation > 0.0)) {
     return "odometry_check_sigma_rotation must be > 0 (rad)";
   }
+  if (!(odometry_check_sigma_time >= 0.0)) return "odometry_check_sigma_time must be >= 0 (s)";
   return "";
 }
 
@@ -260,8 +261,8 @@ ScanMatchingOdometry::ScanMatchingOdometry(const ScanMatcherOptions& options,
                          ? chiSquareQuantile(options.odometry_gate_probability, 3.0)
                          : 0.0) {}
 
-double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry,
-                                                  const Pose2& matched) const {
+double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry, const Pose2& matched,
+                                                  double dt) const {
   // Both increments in the frame of the last corrected pose; the odometry
   // increment's covariance from the control (rot1, trans, rot2) through G.
   const OdometryControl u = controlFromOdometry(last_raw_, raw_odometry);
@@ -273,6 +274,12 @@ double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry,
   const double st = options_.odometry_check_sigma_translation;
   const double sr = options_.odometry_check_sigma_rotation;
   covariance += Vector3(st * st, st * st, sr * sr).asDiagonal().toDenseMatrix();
+  if (dt > 0.0 && options_.odometry_check_sigma_time > 0.0) {
+    // A stamp error τ moves the odometry pose by τ times the step's velocity.
+    const Vector3 velocity = wheels.vector() / dt;
+    const double s = options_.odometry_check_sigma_time;
+    covariance += s * s * velocity * velocity.transpose();
+  }
   return d.dot(covariance.ldlt().solve(d));
 }
 
@@ -317,6 +324,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
     // is a drop-in replacement for the odometry pose.
     initialised_ = true;
     last_raw_ = raw_odometry;
+    last_stamp_ = scan.stamp;
     last_corrected_ = raw_odometry;
     addKeyScan(points, raw_odometry);
     match.ok = true;
@@ -338,7 +346,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
       match.ok = false;
       match.message = m.str();
     } else if (odometry_gate_ > 0.0) {
-      const double d2 = odometryDisagreement(raw_odometry, match.pose);
+      const double d2 = odometryDisagreement(raw_odometry, match.pose, scan.stamp - last_stamp_);
       if (d2 > odometry_gate_) {
         std::ostringstream m;
         m << "match disagrees with the wheels: squared Mahalanobis distance " << d2
@@ -362,6 +370,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
     ++consecutive_refusals_;
   }
   last_raw_ = raw_odometry;
+  last_stamp_ = scan.stamp;
   last_corrected_ = corrected;
 
   const Pose2 since_key = between(last_key_pose_, corrected);

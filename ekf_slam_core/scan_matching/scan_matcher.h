@@ -73,9 +73,13 @@ struct ScanMatcherOptions {
   // The floors make it a test for gross errors only: beyond the wheel model,
   // a scan's match may differ from the odometry by about 4 floors (20 cm,
   // 12 deg) before it is refused.
+  // The odometry may also be stamped late or early against the scan (an
+  // unsynchronised clock, a sample that arrived late): the motion during
+  // odometry_check_sigma_time at the step's speed is added along the step.
   double odometry_gate_probability = 0.999;        // 0: no check
   double odometry_check_sigma_translation = 0.05;  // m, floor per scan (1 sigma)
   double odometry_check_sigma_rotation = 0.0524;   // rad, floor per scan (1 sigma, 3 deg)
+  double odometry_check_sigma_time = 0.2;          // s, 1 sigma of the stamps' disagreement
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
@@ -167,7 +171,7 @@ class ScanMatchingOdometry {
   bool globalMap() const { return options_.map_mode == "global"; }
   // Squared Mahalanobis distance between the matched and the odometry
   // increments (both from the last scan), under the wheel noise.
-  double odometryDisagreement(const Pose2& raw_odometry, const Pose2& matched) const;
+  double odometryDisagreement(const Pose2& raw_odometry, const Pose2& matched, double dt) const;
 
   ScanMatcherOptions options_;
   MotionNoiseOptions wheel_noise_;
@@ -176,6 +180,7 @@ class ScanMatchingOdometry {
   bool initialised_ = false;
   int consecutive_refusals_ = 0;
   Pose2 last_raw_;
+  double last_stamp_ = 0.0;  // of the last scan processed
   Pose2 last_corrected_;
   Pose2 last_key_pose_;
   std::vector<std::vector<Vector2>> key_scans_;  // points in the corrected frame

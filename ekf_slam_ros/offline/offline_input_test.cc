@@ -10,9 +10,11 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 
 #include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_ros/offline/log_input.h"
@@ -47,36 +49,48 @@ TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
   EXPECT_EQ(sim.map.resolution, shipped.map.resolution);
 }
 
-TEST(SlamConfig, ShippedFileLoadsAndMatchesTheDefaults) {
+// Lines of `a` that `b` does not hold, for a readable failure.
+std::string linesNotIn(const std::string& a, const std::string& b) {
+  std::istringstream in(a);
+  std::string line, out;
+  while (std::getline(in, line)) {
+    if (b.find(line + "\n") == std::string::npos) out += "  " + line + "\n";
+  }
+  return out;
+}
+
+// The built-in defaults are the shipped configuration: every key the loader
+// knows has the same value after loading config/ekf_slam.yaml as without it,
+// so running with no --config gives the documented result.
+TEST(SlamConfig, ShippedFileIsExactlyTheBuiltInDefaults) {
   SlamConfig config;
   ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam.yaml", &config), "");
-  // The file documents the defaults: loading it changes nothing.
-  const SlamConfig defaults;
-  EXPECT_EQ(config.pipeline.features.split_threshold, defaults.pipeline.features.split_threshold);
-  EXPECT_EQ(config.pipeline.filter.motion_noise.trans_per_trans,
-            defaults.pipeline.filter.motion_noise.trans_per_trans);
-  EXPECT_EQ(config.pipeline.association.gate_probability,
-            defaults.pipeline.association.gate_probability);
-  EXPECT_EQ(config.map.resolution, defaults.map.resolution);
-  EXPECT_EQ(config.pipeline.scan_matching.enabled, defaults.pipeline.scan_matching.enabled);
-  EXPECT_EQ(config.pipeline.scan_matching.map_mode, defaults.pipeline.scan_matching.map_mode);
-  EXPECT_EQ(config.pipeline.scan_matching.huber_delta, defaults.pipeline.scan_matching.huber_delta);
-  EXPECT_EQ(config.pipeline.scan_matching.prior_sigma_rotation,
-            defaults.pipeline.scan_matching.prior_sigma_rotation);
-  EXPECT_EQ(config.pipeline.scan_matched_motion_noise.min_rot_sigma,
-            defaults.pipeline.scan_matched_motion_noise.min_rot_sigma);
-  EXPECT_EQ(config.pipeline.scan_matched_motion_noise.trans_per_trans,
-            defaults.pipeline.scan_matched_motion_noise.trans_per_trans);
-  const FullSmootherOptions& s = config.pipeline.smoother;
-  const FullSmootherOptions& d = defaults.pipeline.smoother;
-  EXPECT_EQ(s.observation_kernel, d.observation_kernel);
-  EXPECT_EQ(s.optimizer.max_iterations, d.optimizer.max_iterations);
-  EXPECT_EQ(s.optimizer.min_relative_decrease, d.optimizer.min_relative_decrease);
-  EXPECT_EQ(s.revisit_gap, d.revisit_gap);
-  EXPECT_EQ(s.reassociate, d.reassociate);
-  EXPECT_EQ(s.reassociation_position_sigma, d.reassociation_position_sigma);
-  EXPECT_EQ(s.reassociation_gate_probability, d.reassociation_gate_probability);
+  const std::string shipped = describeSlamConfig(config);
+  const std::string defaults = describeSlamConfig(SlamConfig());
+  EXPECT_GT(std::count(defaults.begin(), defaults.end(), '\n'), 130);
+  EXPECT_EQ(shipped, defaults) << "the file differs from the built-in defaults at:\n"
+                               << linesNotIn(shipped, defaults) << "(defaults:\n"
+                               << linesNotIn(defaults, shipped) << ")";
   EXPECT_FALSE(config.laser_pose_given);
+}
+
+// The comparison above sees every kind of value the loader binds.
+TEST(SlamConfig, DescriptionShowsEveryKindOfValue) {
+  SlamConfig config;
+  ASSERT_EQ(loadSlamConfig(YAML::Load("{features: {range_sigma: 0.02, cluster_mode: fixed},"
+                                      " loop_closure: {enabled: false, retry_interval: 7},"
+                                      " filter: {laser_pose: [0.1, 0, 0]},"
+                                      " pipeline: {initial_pose_sigma: [0.5, 0, 0]}}"),
+                           &config),
+            "");
+  const std::string text = describeSlamConfig(config);
+  EXPECT_NE(text.find("features.range_sigma: 0.02\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("features.cluster_mode: fixed\n"), std::string::npos);
+  EXPECT_NE(text.find("loop_closure.enabled: false\n"), std::string::npos);
+  EXPECT_NE(text.find("loop_closure.retry_interval: 7\n"), std::string::npos);
+  EXPECT_NE(text.find("filter.laser_pose: [0.10000000000000001, 0, 0]\n"), std::string::npos);
+  EXPECT_NE(text.find("pipeline.initial_pose_sigma: [0.5, 0, 0]\n"), std::string::npos);
+  EXPECT_NE(text, describeSlamConfig(SlamConfig()));
 }
 
 TEST(SlamConfig, UnknownKeysAndBadValuesAreNamed) {

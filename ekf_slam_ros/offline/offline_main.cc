@@ -27,6 +27,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -40,6 +41,9 @@ using ekf_slam::Pose2;
 void usage() {
   std::cerr << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
                "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
+               "       ekf_slam_offline [--config YAML] --print-config\n"
+               "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
+               "  --print-config: every parameter with the value it would run with, then exit\n"
                "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
                "             no figures): the fastest run, for scoring trajectories\n";
 }
@@ -62,6 +66,19 @@ ekf_slam::OccupancyGrid buildMap(const ekf_slam::OccupancyGridOptions& options,
                                  const std::vector<ekf_slam::StampedPose>& poses,
                                  const Pose2& laser) {
   ekf_slam::OccupancyGrid grid(options);
+  // Size the grid once: every laser position ± the longest inserted reading.
+  Eigen::Vector2d low = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d high = -low;
+  for (size_t i = 0; i < poses.size() && i < log.scans.size(); ++i) {
+    const Pose2 laser_pose = ekf_slam::compose(poses[i].pose, laser);
+    if (!laser_pose.allFinite()) continue;
+    low = low.cwiseMin(laser_pose.translation());
+    high = high.cwiseMax(laser_pose.translation());
+  }
+  if (low.allFinite() && high.allFinite()) {
+    const Eigen::Vector2d reach = Eigen::Vector2d::Constant(options.max_insert_range);
+    grid.cover(low - reach, high + reach);
+  }
   for (size_t i = 0; i < poses.size() && i < log.scans.size(); ++i) {
     grid.insertScan(ekf_slam::compose(poses[i].pose, laser), log.scans[i].scan);
   }
@@ -158,6 +175,7 @@ int main(int argc, char** argv) {
   bool figures = true;
   bool maps = true;
   bool trace = false;
+  bool print_config = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     // roslaunch appends __name:=… and __log:=…; remappings mean nothing here.
@@ -179,12 +197,14 @@ int main(int argc, char** argv) {
       figures = false;  // the figures draw the maps
     } else if (arg == "--trace") {
       trace = true;
+    } else if (arg == "--print-config") {
+      print_config = true;
     } else {
       usage();
       return 1;
     }
   }
-  if (out_dir.empty() || bag_path.empty() == carmen_path.empty()) {
+  if (!print_config && (out_dir.empty() || bag_path.empty() == carmen_path.empty())) {
     usage();
     return 1;
   }
@@ -196,6 +216,10 @@ int main(int argc, char** argv) {
       std::cerr << "ekf_slam_offline: bad configuration " << config_path << ":\n" << error << "\n";
       return 1;
     }
+  }
+  if (print_config) {
+    std::cout << ekf_slam::describeSlamConfig(config);
+    return 0;
   }
 
   // Whatever happens below, a report from an earlier run must not make this

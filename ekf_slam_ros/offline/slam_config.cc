@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <limits>
 
 #include "ekf_slam_ros/offline/yaml_binder.h"
@@ -48,6 +49,7 @@ void bindMotionNoise(YamlBinder noise, MotionNoiseOptions* n) {
 
 void bindFilter(YamlBinder b, FilterOptions* f, bool* laser_pose_given) {
   std::vector<double> laser;
+  if (*laser_pose_given) laser = {f->laser_pose.x, f->laser_pose.y, f->laser_pose.theta};
   b.numbers("laser_pose", &laser, 3);
   if (!laser.empty()) {
     f->laser_pose = Pose2(laser[0], laser[1], laser[2]);
@@ -87,6 +89,7 @@ void bindScanMatching(YamlBinder b, PipelineOptions* p) {
   b.number("odometry_gate_probability", &s.odometry_gate_probability, 0.0, 0.999999999);
   b.number("odometry_check_sigma_translation", &s.odometry_check_sigma_translation, 1e-6, kHuge);
   b.number("odometry_check_sigma_rotation", &s.odometry_check_sigma_rotation, 1e-6, 2 * kPi);
+  b.number("odometry_check_sigma_time", &s.odometry_check_sigma_time, 0.0, 100.0);
   bindMotionNoise(b.child("motion_noise"), &p->scan_matched_motion_noise);
   b.rejectUnknownKeys();
 }
@@ -181,7 +184,9 @@ void bindPipeline(YamlBinder b, PipelineOptions* p) {
   b.number("min_landmark_range", &p->min_landmark_range, 0.0, kHuge);
   b.integer("prune_min_observations", &p->prune_min_observations, 0, 1000000);
   b.integer("prune_age_steps", &p->prune_age_steps, 1L, 100000000L);
-  std::vector<double> sigma;
+  const Vector3 variance = p->initial_pose_covariance.diagonal();
+  std::vector<double> sigma = {std::sqrt(variance(0)), std::sqrt(variance(1)),
+                               std::sqrt(variance(2))};
   b.numbers("initial_pose_sigma", &sigma, 3);
   if (!sigma.empty()) {
     p->initial_pose_covariance =
@@ -210,12 +215,13 @@ void bindInput(YamlBinder b, InputOptions* in) {
   b.rejectUnknownKeys();
 }
 
-}  // namespace
-
-std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
-  auto errors = std::make_shared<std::vector<std::string>>();
-  YamlBinder top(root, "", errors);
-  SlamConfig c = *config;
+// Binds every key of `root` onto `c`; errors and (if given) the final values
+// are collected.
+void bindAll(const YAML::Node& root, SlamConfig* config,
+             std::shared_ptr<std::vector<std::string>> errors,
+             std::shared_ptr<YamlBinder::Values> values) {
+  YamlBinder top(root, "", errors, values);
+  SlamConfig& c = *config;
   bindFeatures(top.child("features"), &c.pipeline.features);
   bindFilter(top.child("filter"), &c.pipeline.filter, &c.laser_pose_given);
   bindAssociation(top.child("association"), &c.pipeline.association);
@@ -226,6 +232,14 @@ std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
   bindMap(top.child("map"), &c.map);
   bindInput(top.child("input"), &c.input);
   top.rejectUnknownKeys();
+}
+
+}  // namespace
+
+std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
+  auto errors = std::make_shared<std::vector<std::string>>();
+  SlamConfig c = *config;
+  bindAll(root, &c, errors, nullptr);
   if (errors->empty()) {
     // Cross-field checks of the components themselves.
     const std::string pipeline = c.pipeline.validate();
@@ -240,6 +254,16 @@ std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config) {
   }
   *config = c;
   return "";
+}
+
+std::string describeSlamConfig(const SlamConfig& config) {
+  auto errors = std::make_shared<std::vector<std::string>>();
+  auto values = std::make_shared<YamlBinder::Values>();
+  SlamConfig copy = config;
+  bindAll(YAML::Node(), &copy, errors, values);
+  std::string out;
+  for (const auto& [key, value] : *values) out += key + ": " + value + "\n";
+  return out;
 }
 
 std::string loadSlamConfigFile(const std::string& path, SlamConfig* config) {

@@ -35,4 +35,9 @@ struct SlamConfig {
 std::string loadSlamConfig(const YAML::Node& root, SlamConfig* config);
 std::string loadSlamConfigFile(const std::string& path, SlamConfig* config);
 
+// Every key the loader knows with the value `config` holds, one
+// "section.key: value" line each in binding order, numbers to full
+// precision: the effective configuration, printable and comparable.
+std::string describeSlamConfig(const SlamConfig& config);
+
 }  // namespace ekf_slam

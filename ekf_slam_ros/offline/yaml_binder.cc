@@ -1,13 +1,25 @@
 #include "ekf_slam_ros/offline/yaml_binder.h"
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace ekf_slam {
 
+namespace {
+
+std::string exact(double v) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.17g", v);
+  return text;
+}
+
+}  // namespace
+
 YamlBinder::YamlBinder(const YAML::Node& node, const std::string& path,
-                       std::shared_ptr<std::vector<std::string>> errors)
-    : node_(node), path_(path), errors_(std::move(errors)) {
+                       std::shared_ptr<std::vector<std::string>> errors,
+                       std::shared_ptr<Values> values)
+    : node_(node), path_(path), errors_(std::move(errors)), values_(std::move(values)) {
   if (node_ && !node_.IsNull() && !node_.IsMap()) {
     error((path_.empty() ? std::string("document") : path_) + ": must be a mapping of keys");
     node_ = YAML::Node();
@@ -20,8 +32,18 @@ std::string YamlBinder::keyPath(const char* key) const {
 
 void YamlBinder::error(const std::string& message) { errors_->push_back(message); }
 
+void YamlBinder::record(const char* key, const std::string& value) {
+  if (values_) values_->emplace_back(keyPath(key), value);
+}
+
 void YamlBinder::number(const char* key, double* value, double min, double max) {
   known_.insert(key);
+  struct Record {
+    YamlBinder* b;
+    const char* key;
+    const double* value;
+    ~Record() { b->record(key, exact(*value)); }
+  } recorder{this, key, value};
   if (!node_ || !node_[key]) return;
   try {
     const double v = node_[key].as<double>();
@@ -45,6 +67,12 @@ void YamlBinder::integer(const char* key, int* value, int min, int max) {
 
 void YamlBinder::integer(const char* key, long* value, long min, long max) {
   known_.insert(key);
+  struct Record {
+    YamlBinder* b;
+    const char* key;
+    const long* value;
+    ~Record() { b->record(key, std::to_string(*value)); }
+  } recorder{this, key, value};
   if (!node_ || !node_[key]) return;
   try {
     const long v = node_[key].as<long>();
@@ -61,6 +89,12 @@ void YamlBinder::integer(const char* key, long* value, long min, long max) {
 
 void YamlBinder::boolean(const char* key, bool* value) {
   known_.insert(key);
+  struct Record {
+    YamlBinder* b;
+    const char* key;
+    const bool* value;
+    ~Record() { b->record(key, *value ? "true" : "false"); }
+  } recorder{this, key, value};
   if (!node_ || !node_[key]) return;
   try {
     *value = node_[key].as<bool>();
@@ -72,6 +106,12 @@ void YamlBinder::boolean(const char* key, bool* value) {
 void YamlBinder::text(const char* key, std::string* value,
                       const std::vector<std::string>& allowed) {
   known_.insert(key);
+  struct Record {
+    YamlBinder* b;
+    const char* key;
+    const std::string* value;
+    ~Record() { b->record(key, *value); }
+  } recorder{this, key, value};
   if (!node_ || !node_[key]) return;
   try {
     const std::string v = node_[key].as<std::string>();
@@ -95,6 +135,16 @@ void YamlBinder::text(const char* key, std::string* value,
 
 void YamlBinder::numbers(const char* key, std::vector<double>* values, size_t count) {
   known_.insert(key);
+  struct Record {
+    YamlBinder* b;
+    const char* key;
+    const std::vector<double>* values;
+    ~Record() {
+      std::string list;
+      for (double v : *values) list += (list.empty() ? "" : ", ") + exact(v);
+      b->record(key, "[" + list + "]");
+    }
+  } recorder{this, key, values};
   if (!node_ || !node_[key]) return;
   const YAML::Node list = node_[key];
   if (!list.IsSequence() || list.size() != count) {
@@ -119,7 +169,7 @@ void YamlBinder::numbers(const char* key, std::vector<double>* values, size_t co
 
 YamlBinder YamlBinder::child(const char* key) {
   known_.insert(key);
-  return YamlBinder(node_ ? node_[key] : YAML::Node(), keyPath(key), errors_);
+  return YamlBinder(node_ ? node_[key] : YAML::Node(), keyPath(key), errors_, values_);
 }
 
 void YamlBinder::rejectUnknownKeys() {

@@ -9,15 +9,23 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ekf_slam {
 
 class YamlBinder {
  public:
-  // `errors` collects messages; shared by the children of this binder.
+  // Every bound key's final value as text, "path.to.key" → value, in binding
+  // order: what the options hold after the binding (defaults where the YAML
+  // is silent). Lets a caller print or compare a whole configuration.
+  using Values = std::vector<std::pair<std::string, std::string>>;
+
+  // `errors` collects messages; shared by the children of this binder, as is
+  // `values` when given.
   YamlBinder(const YAML::Node& node, const std::string& path,
-             std::shared_ptr<std::vector<std::string>> errors);
+             std::shared_ptr<std::vector<std::string>> errors,
+             std::shared_ptr<Values> values = nullptr);
 
   void number(const char* key, double* value, double min, double max);
   void integer(const char* key, int* value, int min, int max);
@@ -35,10 +43,12 @@ class YamlBinder {
  private:
   std::string keyPath(const char* key) const;
   void error(const std::string& message);
+  void record(const char* key, const std::string& value);
 
   YAML::Node node_;
   std::string path_;
   std::shared_ptr<std::vector<std::string>> errors_;
+  std::shared_ptr<Values> values_;
   std::set<std::string> known_;
 };
 
