@@ -427,6 +427,53 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   for (int s = 0; s < landmarkCount(); ++s) slot_of_id_[landmarks_[s].id] = s;
 }
 
+void EkfSlam::reanchor(const Pose2& robot_correction,
+                       const std::vector<std::pair<int, Pose2>>& landmark_corrections) {
+  const int n = dim_;
+  // The rotation acting on each 2-row block (robot position, then each
+  // landmark); identity where nothing moves.
+  std::vector<Matrix2> rotation(1 + landmarkCount(), Matrix2::Identity());
+  std::vector<char> moved(1 + landmarkCount(), 0);
+  const Pose2 robot = compose(robot_correction, pose());
+  x_(0) = robot.x;
+  x_(1) = robot.y;
+  x_(2) = robot.theta;
+  rotation[0] = robot_correction.rotation();
+  moved[0] = 1;
+  if (have_prior_position_) prior_position_ = transformFrom(robot_correction, prior_position_);
+  for (const auto& [id, correction] : landmark_corrections) {
+    const int slot = slotOf(id);
+    if (slot < 0) continue;
+    const int i = landmarkIndex(slot);
+    x_.segment<2>(i) = transformFrom(correction, Vector2(x_.segment<2>(i)));
+    landmarks_[slot].first_estimate = transformFrom(correction, landmarks_[slot].first_estimate);
+    rotation[1 + slot] = correction.rotation();
+    moved[1 + slot] = 1;
+  }
+  // P ↦ J P Jᵀ, block by block: rows of block a by R_a, columns of block b by R_bᵀ.
+  // The robot's heading row/column (index 2) is not rotated.
+  auto start = [](int block) { return block == 0 ? 0 : landmarkIndex(block - 1); };
+  const int blocks = 1 + landmarkCount();
+  for (int a = 0; a < blocks; ++a) {
+    if (!moved[a]) continue;
+    const int ia = start(a);
+    P_.block(ia, 0, 2, n) = rotation[a] * P_.block(ia, 0, 2, n);
+  }
+  for (int b = 0; b < blocks; ++b) {
+    if (!moved[b]) continue;
+    const int ib = start(b);
+    P_.block(0, ib, n, 2) = P_.block(0, ib, n, 2) * rotation[b].transpose();
+  }
+  // Exactly symmetric again (the two passes round differently), in place.
+  for (int c = 0; c < n; ++c) {
+    for (int r = c + 1; r < n; ++r) {
+      const double v = 0.5 * (P_(r, c) + P_(c, r));
+      P_(r, c) = v;
+      P_(c, r) = v;
+    }
+  }
+}
+
 double EkfSlam::poseNees(const Pose2& truth) const {
   Vector3 error = truth.vector() - x_.head<3>();
   error(2) = wrapAngle(error(2));

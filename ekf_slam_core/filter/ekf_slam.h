@@ -154,6 +154,17 @@ class EkfSlam {
   // Normalised estimation error squared of the pose against ground truth.
   double poseNees(const Pose2& truth) const;
 
+  // Moves pieces of the map rigidly, as a loop-closing back end moves the
+  // key scans they hang off: the robot by `robot_correction`, each listed
+  // landmark by its correction (landmarks not listed stay). A correction C
+  // acts in the map frame, x ↦ C ∘ x (a position m ↦ R_C m + t_C). The
+  // covariance follows to first order: P ↦ J P Jᵀ with J block-diagonal,
+  // diag(R_C, 1) for the robot and R_C for each landmark (translations do
+  // not change it). First estimates (first_estimate_jacobians) move too.
+  // Landmark ids that do not exist are skipped.
+  void reanchor(const Pose2& robot_correction,
+                const std::vector<std::pair<int, Pose2>>& landmark_corrections);
+
  private:
   void reserve(int dim);
   void mirrorLowerToUpper();

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "ekf_slam_core/sim/landmark_simulator.h"
+#include "ekf_slam_core/testing/numerical_jacobian.h"
 
 namespace ekf_slam {
 namespace {
@@ -231,6 +232,37 @@ TEST(EkfSlam, TentativeLandmarksSeenOnceArePrunedOthersKept) {
   EXPECT_EQ(filter.slotOf(clutter), -1);
   EXPECT_EQ(filter.slotOf(post), 0);
   EXPECT_EQ(filter.stateDim(), 5);
+}
+
+// Re-anchoring moves the robot and some landmarks rigidly; the covariance
+// is the first-order image J P Jᵀ, with J the numerical Jacobian of the
+// whole state map (landmark 2 is not listed and stays).
+TEST(EkfSlam, ReanchorIsTheRigidMoveOfEachPieceWithItsJacobian) {
+  EkfSlam filter = builtFilter();
+  const VectorXd x0 = filter.state();
+  const MatrixXd P0 = denseCovariance(filter);
+  const Pose2 robot_c(0.4, -0.3, 0.2), first_c(-1.0, 0.5, -0.6), second_c(0.2, 0.1, 3.0);
+  const int first = filter.landmarks()[0].id, second = filter.landmarks()[1].id;
+  const auto map = [&](const VectorXd& x) {
+    VectorXd y = x;
+    const Pose2 r = compose(robot_c, Pose2(x(0), x(1), x(2)));
+    y.head<3>() = r.vector();
+    y.segment<2>(3) = transformFrom(first_c, Vector2(x.segment<2>(3)));
+    y.segment<2>(5) = transformFrom(second_c, Vector2(x.segment<2>(5)));
+    return y;
+  };
+  filter.reanchor(robot_c, {{first, first_c}, {second, second_c}, {12345, Pose2(9, 9, 1)}});
+  const VectorXd expected_x = map(x0);
+  EXPECT_LT((filter.state().head<2>() - expected_x.head<2>()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_NEAR(wrapAngle(filter.state()(2) - expected_x(2)), 0.0, 1e-12);
+  EXPECT_LT(
+      (filter.state().tail(x0.size() - 3) - expected_x.tail(x0.size() - 3)).cwiseAbs().maxCoeff(),
+      1e-12);
+  EXPECT_EQ(filter.state().segment<2>(7), x0.segment<2>(7));  // not listed: stays
+  const MatrixXd J = testing::numericalJacobian(map, x0);
+  const MatrixXd expected_P = J * P0 * J.transpose();
+  EXPECT_LT((denseCovariance(filter) - expected_P).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(denseCovariance(filter), denseCovariance(filter).transpose());
 }
 
 TEST(EkfSlam, RemovingALandmarkKeepsTheOthersJointCovariance) {

@@ -76,6 +76,9 @@ struct LoopClosureOptions {
   double loop_sigma_translation = 0.05;  // m
   double loop_sigma_rotation = 0.01;     // rad
   double min_final_weight = 0.1;  // loops the kernel weighs below this are dropped at the end
+  // In the pipeline: after each optimisation the EKF takes the loop-closed
+  // geometry (robot and landmarks move with their key scans).
+  bool reanchor_filter = true;
   PoseGraphOptions optimizer;
 
   std::string validate() const;  // empty when valid, else names the bad field

@@ -123,9 +123,26 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   ScanResult out;
   bool usable = false;
   auto record = [&]() {
+    Pose2 causal = out.pose;
     if (loop_closer_ && scan != nullptr) {
+      const long optimisations = loop_closer_->counters().optimisations;
       loop_closer_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
       record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
+      const Pose2 graph_pose = loop_closer_->latestPose();
+      if (!have_map_from_graph_) {
+        map_from_graph_ = compose(out.pose, inverse(graph_pose));
+        have_map_from_graph_ = true;
+      }
+      causal = compose(map_from_graph_, graph_pose);
+      trackKeyScans(out);
+      if (loop_closer_->counters().optimisations != optimisations &&
+          options_.loop_closure.reanchor_filter) {
+        reanchorFilter(causal, out.pose);
+        const bool iterated = out.outcome == ScanOutcome::kIterated;
+        out.pose = iterated ? filter_.pose() : deadReckoned(odometry);
+        out.pose_covariance =
+            iterated ? filter_.poseCovariance() : deadReckonedCovariance(odometry);
+      }
     }
     ScanRecord r;
     r.stamp = stamp;
@@ -134,15 +151,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     r.odometry = odometry;
     r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
     r.odometry_at_iteration = last_odometry_;
-    r.causal = out.pose;
-    if (loop_closer_ && scan != nullptr) {
-      const Pose2 graph_pose = loop_closer_->latestPose();
-      if (!have_map_from_graph_) {
-        map_from_graph_ = compose(out.pose, inverse(graph_pose));
-        have_map_from_graph_ = true;
-      }
-      r.causal = compose(map_from_graph_, graph_pose);
-    }
+    r.causal = causal;
     records_.push_back(r);
   };
 
@@ -318,6 +327,41 @@ std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) out.push_back({r.stamp, r.filtered});
   return out;
+}
+
+// Which key scan each landmark hangs off, and the filter's pose at each key
+// scan: a landmark hangs off the key scan current when it was created (the
+// pose it was measured from), so that a loop closure can move it with that
+// key scan.
+void SlamPipeline::trackKeyScans(const ScanResult& out) {
+  const long keys = loop_closer_->counters().key_scans;
+  while (static_cast<long>(key_filtered_.size()) < keys) key_filtered_.push_back(out.pose);
+  if (keys == 0) return;
+  for (int id : out.iteration.new_landmark_ids) landmark_key_[id] = static_cast<int>(keys) - 1;
+}
+
+// After an optimisation of the back end, the filter takes the loop-closed
+// geometry: the robot moves to the causal estimate, and every landmark by
+// the transform that takes its key scan from where the filter had it to
+// where the graph has it now. Later updates then agree with the closed
+// loop instead of pulling the robot back to the drifted map.
+void SlamPipeline::reanchorFilter(const Pose2& causal, const Pose2& published) {
+  const PoseGraph& graph = loop_closer_->graph();
+  std::vector<Pose2> key_map(key_filtered_.size());
+  for (size_t k = 0; k < key_filtered_.size(); ++k) {
+    key_map[k] = compose(map_from_graph_, graph.pose(static_cast<int>(k)));
+  }
+  std::vector<std::pair<int, Pose2>> corrections;
+  corrections.reserve(filter_.landmarks().size());
+  for (const LandmarkInfo& info : filter_.landmarks()) {
+    const auto it = landmark_key_.find(info.id);
+    if (it == landmark_key_.end()) continue;
+    const int k = it->second;
+    corrections.emplace_back(info.id, compose(key_map[k], inverse(key_filtered_[k])));
+  }
+  filter_.reanchor(compose(causal, inverse(published)), corrections);
+  key_filtered_ = std::move(key_map);
+  ++counters_.reanchors;
 }
 
 std::vector<StampedPose> SlamPipeline::causalScanPoses() const {

@@ -22,6 +22,7 @@
 
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "ekf_slam_core/eval/relations.h"
@@ -118,6 +119,7 @@ struct PipelineCounters {
   long scan_matches = 0;                  // scans aligned by the scan matcher
   long scan_match_refusals = 0;           // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
+  long reanchors = 0;                     // times the filter took the loop-closed geometry
   double nis_sum = 0.0;                   // over all matches
 };
 
@@ -193,6 +195,8 @@ class SlamPipeline {
   Pose2 deadReckoned(const Pose2& odometry) const;
   Matrix3 deadReckonedCovariance(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
+  void trackKeyScans(const ScanResult& out);
+  void reanchorFilter(const Pose2& causal, const Pose2& published);
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;
   std::vector<Pose2> loopClosedIterationPoses() const;  // empty without loop closure
@@ -204,8 +208,10 @@ class SlamPipeline {
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;
   std::vector<int> record_of_loop_scan_;  // records_ index of each scan given to the loop closer
-  bool have_map_from_graph_ = false;      // map_from_graph_ is set (at the first recorded scan)
-  Pose2 map_from_graph_;                  // the loop closer's frame in the map frame
+  std::vector<Pose2> key_filtered_;       // the filter's pose at each key scan (map frame)
+  std::unordered_map<int, int> landmark_key_;  // landmark id → key scan it hangs off
+  bool have_map_from_graph_ = false;  // map_from_graph_ is set (at the first recorded scan)
+  Pose2 map_from_graph_;              // the loop closer's frame in the map frame
   PipelineCounters counters_;
   std::vector<ScanRecord> records_;
   bool initialised_ = false;

@@ -399,7 +399,8 @@ int main(int argc, char** argv) {
                        " of them disagreed with the wheels)"
                  : std::string("off (raw odometry is the control)"))
          << "\n"
-         << "loop closure: " << loopClosureLine(pipeline.loopCloser()) << "\n"
+         << "loop closure: " << loopClosureLine(pipeline.loopCloser())
+         << "; the filter re-anchored " << c.reanchors << " times\n"
          << "observations (landmark candidates): " << c.observations << " ("
          << (c.iterations ? static_cast<double>(c.observations) / c.iterations : 0.0)
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous
