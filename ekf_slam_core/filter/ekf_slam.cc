@@ -396,35 +396,59 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   if (slots.empty()) return;
   std::vector<char> drop(landmarkCount(), 0);
   for (int s : slots) drop[s] = 1;
-  // Dropping only the newest landmarks (often the tentative ones) needs no
-  // copy: the live block just ends earlier.
-  int trailing = 0;
-  while (trailing < landmarkCount() && drop[landmarkCount() - 1 - trailing]) ++trailing;
-  if (trailing == static_cast<int>(slots.size())) {
-    for (int k = 0; k < trailing; ++k) {
-      slot_of_id_.erase(landmarks_.back().id);
-      landmarks_.pop_back();
-    }
-    dim_ -= kLandmarkDim * trailing;
-    return;
-  }
-  std::vector<int> keep_index = {0, 1, 2};
-  std::vector<LandmarkInfo> kept;
+  // The kept state indices as runs (old start, new start, length): the pose
+  // and each stretch of consecutive kept landmarks.
+  struct Run {
+    int from, to, length;
+  };
+  std::vector<Run> runs = {{0, 0, kPoseDim}};
+  int n = kPoseDim;
   for (int s = 0; s < landmarkCount(); ++s) {
     if (drop[s]) continue;
-    keep_index.push_back(landmarkIndex(s));
-    keep_index.push_back(landmarkIndex(s) + 1);
-    kept.push_back(landmarks_[s]);
+    const int from = landmarkIndex(s);
+    if (runs.back().from + runs.back().length == from) {
+      runs.back().length += kLandmarkDim;
+    } else {
+      runs.push_back({from, n, kLandmarkDim});
+    }
+    n += kLandmarkDim;
   }
-  const int n = static_cast<int>(keep_index.size());
-  const Eigen::VectorXd x = x_.head(dim_)(keep_index);
-  const Eigen::MatrixXd P = P_.topLeftCorner(dim_, dim_)(keep_index, keep_index);
-  x_.head(n) = x;
-  P_.topLeftCorner(n, n) = P;
+  // Move the kept entries down within the storage, column by column in
+  // increasing order, each run of kept rows to its new place. No index grows,
+  // so every entry is read before anything is written over it, also within a
+  // column, where rows only move up. Entries already in place are skipped: a
+  // removal of the newest landmarks moves nothing, one in the middle only what
+  // lies beyond it. No n × n temporary: on large maps, allocating and filling
+  // one costs far more than the update.
+  double* const x = x_.data();
+  for (const Run& rows : runs) {
+    if (rows.from != rows.to) std::copy(x + rows.from, x + rows.from + rows.length, x + rows.to);
+  }
+  for (const Run& cols : runs) {
+    for (int k = 0; k < cols.length; ++k) {
+      const double* const from = &P_(0, cols.from + k);
+      double* const to = &P_(0, cols.to + k);
+      for (const Run& rows : runs) {
+        if (cols.from == cols.to && rows.from == rows.to) continue;
+        std::copy(from + rows.from, from + rows.from + rows.length, to + rows.to);
+      }
+    }
+  }
   dim_ = n;
-  landmarks_ = std::move(kept);
-  slot_of_id_.clear();
-  for (int s = 0; s < landmarkCount(); ++s) slot_of_id_[landmarks_[s].id] = s;
+
+  int kept = 0;
+  for (int s = 0; s < static_cast<int>(drop.size()); ++s) {
+    if (drop[s]) {
+      slot_of_id_.erase(landmarks_[s].id);
+      continue;
+    }
+    if (kept != s) {
+      landmarks_[kept] = landmarks_[s];
+      slot_of_id_[landmarks_[kept].id] = kept;
+    }
+    ++kept;
+  }
+  landmarks_.resize(kept);
 }
 
 double EkfSlam::poseNees(const Pose2& truth) const {
