@@ -262,6 +262,24 @@ TEST(EkfSlam, RemovingTheNewestLandmarkNeedsNoCopyAndKeepsTheRest) {
   EXPECT_EQ(filter.stateDim(), 11);
 }
 
+// The block accessors (what the predictions and data association read) agree
+// with the whole covariance, in both orders of a pair.
+void expectBlocksOfTheCovariance(const EkfSlam& filter) {
+  const MatrixXd P = filter.covariance();
+  EXPECT_EQ(filter.poseCovariance(), Matrix3(P.topLeftCorner<3, 3>()));
+  for (int a = 0; a < filter.landmarkCount(); ++a) {
+    const int ja = EkfSlam::landmarkIndex(a);
+    EXPECT_EQ(filter.landmarkCovariance(a), Matrix2(P.block<2, 2>(ja, ja))) << a;
+    EXPECT_EQ(filter.poseLandmarkCovariance(a), (Eigen::Matrix<double, 3, 2>(P.block<3, 2>(0, ja))))
+        << a;
+    for (int b = 0; b < filter.landmarkCount(); ++b) {
+      const int jb = EkfSlam::landmarkIndex(b);
+      EXPECT_EQ(filter.landmarkCrossCovariance(a, b), Matrix2(P.block<2, 2>(ja, jb)))
+          << a << ", " << b;
+    }
+  }
+}
+
 // Updates `filter` with an observation of each landmark in `slots`, a little
 // off its prediction, and checks the result against the dense textbook update
 // (stacked H, K = P Hᵀ S⁻¹, P' = (I − K H) P) of the state it had before.
@@ -295,6 +313,7 @@ void expectTextbookUpdate(EkfSlam& filter, const std::vector<int>& slots) {
   const MatrixXd P1 = filter.covariance();
   EXPECT_LT((P1 - P_expected).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_EQ(P1, P1.transpose()) << "P must be exactly symmetric";
+  expectBlocksOfTheCovariance(filter);
 }
 
 // Pruning several landmarks at once (the first, two adjacent pairs, the
@@ -333,6 +352,7 @@ TEST(EkfSlam, PruningFromTheMiddleKeepsExactlyTheOtherRowsAndColumns) {
     const int j = EkfSlam::landmarkIndex(seen[s]);
     EXPECT_EQ(filter.landmarkCovariance(s), Matrix2(P.block<2, 2>(j, j)));
   }
+  expectBlocksOfTheCovariance(filter);
   expectTextbookUpdate(filter, {1, 3});
   int id = -1;
   ASSERT_EQ(filter.augment(observation(2.2, 0.1), &id), FilterStatus::kOk);
@@ -407,6 +427,7 @@ TEST(EkfSlam, MergingATwinFromTheMiddleIsTheConstrainedUpdateWithoutIt) {
   const MatrixXd P1 = filter.covariance();
   EXPECT_LT((P1 - P_expected(keep, keep)).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_EQ(P1, P1.transpose()) << "P must be exactly symmetric";
+  expectBlocksOfTheCovariance(filter);
   expectTextbookUpdate(filter, {1, 3, 4});
 }
 
