@@ -62,24 +62,24 @@ class JointCompatibility {
     }
     const int p = static_cast<int>(obs.size());
     if (p == 0) return 0.0;
-    const auto P = filter_.covariance();
+    const Matrix3 P_rr = filter_.poseCovariance();
     Eigen::MatrixXd S(2 * p, 2 * p);
     Eigen::VectorXd nu(2 * p);
     for (int a = 0; a < p; ++a) {
       const int sa = current_[obs[a]];
       const EkfSlam::Prediction& pa = predictions_[sa];
-      const int ja = EkfSlam::landmarkIndex(sa);
       const PointObservation& oa = observations_[obs[a]];
       nu(2 * a) = oa.z.range - pa.z.range;
       nu(2 * a + 1) = wrapAngle(oa.z.bearing - pa.z.bearing);
       for (int b = 0; b <= a; ++b) {
         const int sb = current_[obs[b]];
         const EkfSlam::Prediction& pb = predictions_[sb];
-        const int jb = EkfSlam::landmarkIndex(sb);
-        Matrix2 block = pa.H_robot * P.topLeftCorner<3, 3>() * pb.H_robot.transpose() +
-                        pa.H_robot * P.block<3, 2>(0, jb) * pb.H_landmark.transpose() +
-                        pa.H_landmark * P.block<2, 3>(ja, 0) * pb.H_robot.transpose() +
-                        pa.H_landmark * P.block<2, 2>(ja, jb) * pb.H_landmark.transpose();
+        Matrix2 block =
+            pa.H_robot * P_rr * pb.H_robot.transpose() +
+            pa.H_robot * filter_.poseLandmarkCovariance(sb) * pb.H_landmark.transpose() +
+            pa.H_landmark * filter_.poseLandmarkCovariance(sa).transpose() *
+                pb.H_robot.transpose() +
+            pa.H_landmark * filter_.landmarkCrossCovariance(sa, sb) * pb.H_landmark.transpose();
         if (a == b) block += oa.covariance;
         S.block<2, 2>(2 * a, 2 * b) = block;
         S.block<2, 2>(2 * b, 2 * a) = block.transpose();

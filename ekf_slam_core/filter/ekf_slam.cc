@@ -176,6 +176,7 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
   }
 
   const int n = dim_;
+  fillLandmarkColumns(slots);
   auto P = P_.topLeftCorner(n, n);
   // P Hᵀ (n × 2k) from the sparse H: only robot and one landmark column block each.
   Eigen::MatrixXd PHt(n, 2 * k);
@@ -218,7 +219,7 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
   x_.head(n).noalias() += Wt.transpose() * whitened;
   x_(2) = wrapAngle(x_(2));
   P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
-  mirrorLowerToUpper();
+  mirrorPoseRowsAndLandmarkBlocks();
 
   for (int i = 0; i < k; ++i) {
     LandmarkInfo& info = landmarks_[slots[i]];
@@ -228,23 +229,44 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
   return FilterStatus::kOk;
 }
 
-void EkfSlam::mirrorLowerToUpper() {
-  // Copy the lower triangle onto the upper one in cache-sized tiles: a plain
-  // row-by-row copy reads the column-major matrix with a stride of the whole
-  // capacity and costs more than the update itself on large maps.
-  constexpr int kTile = 32;
+void EkfSlam::mirrorPoseRowsAndLandmarkBlocks() {
+  // After a downdate of the lower triangle, O(n): the upper triangle of the
+  // pose rows and of each landmark's 2 × 2 block, which the predictions read.
   const int n = dim_;
-  for (int c0 = 0; c0 < n; c0 += kTile) {
-    const int cw = std::min(kTile, n - c0);
-    for (int r0 = 0; r0 < c0; r0 += kTile) {
-      const int rw = std::min(kTile, c0 - r0);
-      // Upper tile (rows r0.., cols c0..) from the lower tile (rows c0.., cols r0..).
-      P_.block(r0, c0, rw, cw) = P_.block(c0, r0, cw, rw).transpose();
-    }
-    for (int c = c0 + 1; c < c0 + cw; ++c) {  // diagonal tile
-      for (int r = c0; r < c; ++r) P_(r, c) = P_(c, r);
+  P_(0, 1) = P_(1, 0);
+  P_(0, 2) = P_(2, 0);
+  P_(1, 2) = P_(2, 1);
+  P_.block(0, kPoseDim, kPoseDim, n - kPoseDim) =
+      P_.block(kPoseDim, 0, n - kPoseDim, kPoseDim).transpose();
+  for (int j = kPoseDim; j < n; j += kLandmarkDim) P_(j, j + 1) = P_(j + 1, j);
+}
+
+void EkfSlam::fillLandmarkColumns(const std::vector<int>& slots) {
+  // Rows 0–2 and the 2 × 2 blocks are current; the rows of the earlier
+  // landmarks come from the lower triangle, O(n) per landmark. The source is
+  // a row of the column-major storage, one column (and page) per entry: all
+  // landmarks take a tile of columns in turn so that its pages are reused.
+  constexpr int kTile = 64;
+  int end = kPoseDim;
+  for (int slot : slots) end = std::max(end, landmarkIndex(slot));
+  for (int c0 = kPoseDim; c0 < end; c0 += kTile) {
+    for (int slot : slots) {
+      const int j = landmarkIndex(slot);
+      const int count = std::min(c0 + kTile, j) - c0;
+      if (count <= 0) continue;
+      P_.block(c0, j, count, kLandmarkDim) = P_.block(j, c0, kLandmarkDim, count).transpose();
     }
   }
+}
+
+Eigen::MatrixXd EkfSlam::covariance() const {
+  return P_.topLeftCorner(dim_, dim_).selfadjointView<Eigen::Lower>();
+}
+
+Matrix2 EkfSlam::landmarkCrossCovariance(int slot_a, int slot_b) const {
+  const int ja = landmarkIndex(slot_a), jb = landmarkIndex(slot_b);
+  if (ja >= jb) return P_.block<2, 2>(ja, jb);
+  return P_.block<2, 2>(jb, ja).transpose();
 }
 
 FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) {
@@ -327,6 +349,7 @@ FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate, doub
   if (a < 0 || b < 0 || a == b) return FilterStatus::kUnknownLandmark;
   const int n = dim_;
   const int ia = landmarkIndex(a), ib = landmarkIndex(b);
+  fillLandmarkColumns({a, b});
   auto P = P_.topLeftCorner(n, n);
   // H = [… I … −I …] picks x_a − x_b; P Hᵀ and S = H P Hᵀ are column blocks.
   const Eigen::MatrixXd PHt = P.middleCols<2>(ia) - P.middleCols<2>(ib);  // n × 2
@@ -346,7 +369,7 @@ FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate, doub
   x_.head(n).noalias() -= Wt.transpose() * whitened;
   x_(2) = wrapAngle(x_(2));
   P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
-  mirrorLowerToUpper();
+  mirrorPoseRowsAndLandmarkBlocks();
   LandmarkInfo& kept = landmarks_[a];
   const LandmarkInfo& dropped = landmarks_[b];
   kept.observations += dropped.observations;
@@ -396,35 +419,65 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   if (slots.empty()) return;
   std::vector<char> drop(landmarkCount(), 0);
   for (int s : slots) drop[s] = 1;
-  // Dropping only the newest landmarks (often the tentative ones) needs no
-  // copy: the live block just ends earlier.
-  int trailing = 0;
-  while (trailing < landmarkCount() && drop[landmarkCount() - 1 - trailing]) ++trailing;
-  if (trailing == static_cast<int>(slots.size())) {
-    for (int k = 0; k < trailing; ++k) {
-      slot_of_id_.erase(landmarks_.back().id);
-      landmarks_.pop_back();
-    }
-    dim_ -= kLandmarkDim * trailing;
-    return;
-  }
-  std::vector<int> keep_index = {0, 1, 2};
-  std::vector<LandmarkInfo> kept;
+  // The kept state indices as runs (old start, new start, length): the pose,
+  // then each stretch of consecutive kept landmarks.
+  struct Run {
+    int from, to, length;
+  };
+  std::vector<Run> runs = {{0, 0, kPoseDim}};
+  int n = kPoseDim;
   for (int s = 0; s < landmarkCount(); ++s) {
     if (drop[s]) continue;
-    keep_index.push_back(landmarkIndex(s));
-    keep_index.push_back(landmarkIndex(s) + 1);
-    kept.push_back(landmarks_[s]);
+    const int from = landmarkIndex(s);
+    if (runs.size() > 1 && runs.back().from + runs.back().length == from) {
+      runs.back().length += kLandmarkDim;
+    } else {
+      runs.push_back({from, n, kLandmarkDim});
+    }
+    n += kLandmarkDim;
   }
-  const int n = static_cast<int>(keep_index.size());
-  const Eigen::VectorXd x = x_.head(dim_)(keep_index);
-  const Eigen::MatrixXd P = P_.topLeftCorner(dim_, dim_)(keep_index, keep_index);
-  x_.head(n) = x;
-  P_.topLeftCorner(n, n) = P;
+  // Move the kept entries down within the storage, column by column in
+  // increasing order, each run of kept rows to its new place. No index grows,
+  // so every entry is read before anything is written over it, also within a
+  // column, where rows only move up. Entries already in place are skipped: a
+  // removal of the newest landmarks moves nothing, one in the middle only what
+  // lies beyond it. No n × n temporary: on large maps, allocating and filling
+  // one costs far more than the update. Of the upper triangle only the pose
+  // rows and the landmarks' 2 × 2 blocks are current (see the header), so
+  // column c needs rows 0–2 and rows from c − 1 on.
+  double* const x = x_.data();
+  for (const Run& rows : runs) {
+    if (rows.from != rows.to) std::copy(x + rows.from, x + rows.from + rows.length, x + rows.to);
+  }
+  for (const Run& cols : runs) {
+    for (int k = 0; k < cols.length; ++k) {
+      const int c = cols.to + k;
+      const double* const from = &P_(0, cols.from + k);
+      double* const to = &P_(0, c);
+      for (const Run& rows : runs) {
+        if (cols.from == cols.to && rows.from == rows.to) continue;
+        // Rows [to + skip, to + length) of this run are needed in column c.
+        const int skip = rows.to == 0 ? 0 : std::max(0, c - 1 - rows.to);
+        if (skip >= rows.length) continue;
+        std::copy(from + rows.from + skip, from + rows.from + rows.length, to + rows.to + skip);
+      }
+    }
+  }
   dim_ = n;
-  landmarks_ = std::move(kept);
-  slot_of_id_.clear();
-  for (int s = 0; s < landmarkCount(); ++s) slot_of_id_[landmarks_[s].id] = s;
+
+  int kept = 0;
+  for (int s = 0; s < static_cast<int>(drop.size()); ++s) {
+    if (drop[s]) {
+      slot_of_id_.erase(landmarks_[s].id);
+      continue;
+    }
+    if (kept != s) {
+      landmarks_[kept] = landmarks_[s];
+      slot_of_id_[landmarks_[kept].id] = kept;
+    }
+    ++kept;
+  }
+  landmarks_.resize(kept);
 }
 
 void EkfSlam::reanchor(const Pose2& robot_correction,

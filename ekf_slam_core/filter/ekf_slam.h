@@ -11,6 +11,11 @@
 //   predict O(n) (only the robot rows/columns change), augment O(n),
 //   update O(n²k) through a symmetric rank-2k downdate of P (no Joseph
 //   product, no n×n×n multiply; P stays symmetric by construction).
+// The stored P is current in its lower triangle; of the upper one only the
+// pose rows and each landmark's 2 × 2 block are kept, O(n) after a downdate
+// (mirroring the whole triangle would cost about as much as the downdate).
+// An update or merge first fills the landmark columns it reads from the
+// lower triangle; covariance() returns a full symmetric copy.
 //
 // Every operation validates its input. On any status other than kOk the
 // state is unchanged, so a caller can count, log and carry on.
@@ -144,8 +149,16 @@ class EkfSlam {
     return P_.block<2, 2>(landmarkIndex(slot), landmarkIndex(slot));
   }
   const std::vector<LandmarkInfo>& landmarks() const { return landmarks_; }
+  // Cross-covariance of two landmarks' positions (P_ab, 2 × 2).
+  Matrix2 landmarkCrossCovariance(int slot_a, int slot_b) const;
+  // Of the pose and a landmark's position (P_rm, 3 × 2).
+  Eigen::Matrix<double, 3, 2> poseLandmarkCovariance(int slot) const {
+    return P_.block<3, 2>(0, landmarkIndex(slot));
+  }
   Eigen::Ref<const Eigen::VectorXd> state() const { return x_.head(dim_); }
-  Eigen::Ref<const Eigen::MatrixXd> covariance() const { return P_.topLeftCorner(dim_, dim_); }
+  // The whole n × n covariance, a copy (O(n²)): for tests and tools; the
+  // accessors above read single blocks.
+  Eigen::MatrixXd covariance() const;
   long step() const { return step_; }
   // F of the last accepted prediction (for the smoother's record).
   const Matrix3& lastMotionJacobian() const { return last_F_; }
@@ -167,7 +180,8 @@ class EkfSlam {
 
  private:
   void reserve(int dim);
-  void mirrorLowerToUpper();
+  void mirrorPoseRowsAndLandmarkBlocks();
+  void fillLandmarkColumns(const std::vector<int>& slots);
   void removeSlots(const std::vector<int>& slots);
 
   FilterOptions options_;

@@ -294,6 +294,104 @@ TEST(EkfSlam, RemovingTheNewestLandmarkNeedsNoCopyAndKeepsTheRest) {
   EXPECT_EQ(filter.stateDim(), 11);
 }
 
+// The block accessors (what the predictions and data association read) agree
+// with the whole covariance, in both orders of a pair.
+void expectBlocksOfTheCovariance(const EkfSlam& filter) {
+  const MatrixXd P = filter.covariance();
+  EXPECT_EQ(filter.poseCovariance(), Matrix3(P.topLeftCorner<3, 3>()));
+  for (int a = 0; a < filter.landmarkCount(); ++a) {
+    const int ja = EkfSlam::landmarkIndex(a);
+    EXPECT_EQ(filter.landmarkCovariance(a), Matrix2(P.block<2, 2>(ja, ja))) << a;
+    EXPECT_EQ(filter.poseLandmarkCovariance(a), (Eigen::Matrix<double, 3, 2>(P.block<3, 2>(0, ja))))
+        << a;
+    for (int b = 0; b < filter.landmarkCount(); ++b) {
+      const int jb = EkfSlam::landmarkIndex(b);
+      EXPECT_EQ(filter.landmarkCrossCovariance(a, b), Matrix2(P.block<2, 2>(ja, jb)))
+          << a << ", " << b;
+    }
+  }
+}
+
+// Updates `filter` with an observation of each landmark in `slots`, a little
+// off its prediction, and checks the result against the dense textbook update
+// (stacked H, K = P Hᵀ S⁻¹, P' = (I − K H) P) of the state it had before.
+void expectTextbookUpdate(EkfSlam& filter, const std::vector<int>& slots) {
+  const VectorXd x0 = filter.state();
+  const MatrixXd P0 = filter.covariance();
+  const int n = x0.size(), k = slots.size();
+  MatrixXd H = MatrixXd::Zero(2 * k, n);
+  MatrixXd R = MatrixXd::Zero(2 * k, 2 * k);
+  VectorXd nu(2 * k);
+  std::vector<PointObservation> obs;
+  std::vector<PointMatch> matches;
+  for (int i = 0; i < k; ++i) {
+    EkfSlam::Prediction p;
+    ASSERT_TRUE(filter.predictObservation(slots[i], &p));
+    obs.push_back(observation(p.z.range + 0.01 * (i + 1), p.z.bearing - 0.004 * (i + 1)));
+    matches.push_back({i, filter.landmarks()[slots[i]].id});
+    H.block<2, 3>(2 * i, 0) = p.H_robot;
+    H.block<2, 2>(2 * i, EkfSlam::landmarkIndex(slots[i])) = p.H_landmark;
+    R.block<2, 2>(2 * i, 2 * i) = obs.back().covariance;
+    nu(2 * i) = obs.back().z.range - p.z.range;
+    nu(2 * i + 1) = wrapAngle(obs.back().z.bearing - p.z.bearing);
+  }
+  const MatrixXd K = P0 * H.transpose() * (H * P0 * H.transpose() + R).inverse();
+  const VectorXd x_expected = x0 + K * nu;
+  const MatrixXd P_expected = (MatrixXd::Identity(n, n) - K * H) * P0;
+  ASSERT_EQ(filter.update(obs, matches), FilterStatus::kOk);
+  VectorXd dx = filter.state() - x_expected;
+  dx(2) = wrapAngle(dx(2));
+  EXPECT_LT(dx.cwiseAbs().maxCoeff(), 1e-12);
+  const MatrixXd P1 = filter.covariance();
+  EXPECT_LT((P1 - P_expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(P1, P1.transpose()) << "P must be exactly symmetric";
+  expectBlocksOfTheCovariance(filter);
+}
+
+// Pruning several landmarks at once (the first, two adjacent pairs, the
+// newest) moves the remaining rows and columns down within the storage; the
+// result must be exactly the rows and columns of the kept landmarks, and the
+// filter must go on from there.
+TEST(EkfSlam, PruningFromTheMiddleKeepsExactlyTheOtherRowsAndColumns) {
+  FilterOptions options = testOptions();
+  options.tentative_max_age = 2;
+  EkfSlam filter(options, Pose2(0.5, -0.2, 0.3), Matrix3::Identity() * 0.01);
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_EQ(filter.augment(observation(1.5 + 0.4 * i, -1.2 + 0.27 * i)), FilterStatus::kOk);
+  }
+  ASSERT_EQ(filter.predict(Pose2(), Pose2(0.2, 0.05, 0.1), 0.2), FilterStatus::kOk);
+  const std::vector<int> seen = {1, 2, 5, 8};  // the others stay seen once
+  std::vector<int> seen_ids;
+  for (int slot : seen) seen_ids.push_back(filter.landmarks()[slot].id);
+  expectTextbookUpdate(filter, seen);
+  ASSERT_EQ(filter.predict(Pose2(), Pose2(0.2, 0.0, 0.05), 0.2), FilterStatus::kOk);
+  const VectorXd x = filter.state();
+  const MatrixXd P = filter.covariance();
+
+  EXPECT_EQ(filter.pruneTentative(), 6);  // slots 0, 3, 4, 6, 7, 9
+  std::vector<int> keep = {0, 1, 2};
+  for (int slot : seen) {
+    keep.push_back(EkfSlam::landmarkIndex(slot));
+    keep.push_back(EkfSlam::landmarkIndex(slot) + 1);
+  }
+  ASSERT_EQ(filter.stateDim(), static_cast<int>(keep.size()));
+  EXPECT_EQ(filter.state(), x(keep));
+  EXPECT_EQ(filter.covariance(), P(keep, keep));
+  ASSERT_EQ(filter.landmarkCount(), 4);
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_EQ(filter.landmarks()[s].id, seen_ids[s]);
+    EXPECT_EQ(filter.slotOf(seen_ids[s]), s);
+    const int j = EkfSlam::landmarkIndex(seen[s]);
+    EXPECT_EQ(filter.landmarkCovariance(s), Matrix2(P.block<2, 2>(j, j)));
+  }
+  expectBlocksOfTheCovariance(filter);
+  expectTextbookUpdate(filter, {1, 3});
+  int id = -1;
+  ASSERT_EQ(filter.augment(observation(2.2, 0.1), &id), FilterStatus::kOk);
+  EXPECT_EQ(filter.slotOf(id), 4);
+  expectTextbookUpdate(filter, {0, 2, 4});
+}
+
 // A corner seen a second time outside the new-landmark gate becomes a twin.
 // Merging conditions the state on "the two are one point" — the textbook
 // constrained update x − P Hᵀ(H P Hᵀ)⁻¹ H x, P − P Hᵀ(H P Hᵀ)⁻¹ H P with
@@ -326,6 +424,43 @@ TEST(EkfSlam, MergingTwinLandmarksIsTheConstrainedUpdate) {
   // The merged landmark is known at least as well as either was.
   const Matrix2 before = P.block<2, 2>(3, 3), after = filter.landmarkCovariance(0);
   EXPECT_GE((before - after).eigenvalues().real().minCoeff(), -1e-15);
+}
+
+// A twin with newer landmarks after it: the merge drops rows and columns from
+// the middle of the state.
+TEST(EkfSlam, MergingATwinFromTheMiddleIsTheConstrainedUpdateWithoutIt) {
+  EkfSlam filter = builtFilter();
+  int twin = -1;
+  ASSERT_EQ(filter.augment(observation(1.76, 0.335), &twin), FilterStatus::kOk);
+  ASSERT_EQ(filter.augment(observation(2.6, -1.1)), FilterStatus::kOk);
+  ASSERT_EQ(filter.augment(observation(3.4, 0.9)), FilterStatus::kOk);
+  const int t = filter.slotOf(twin);
+  ASSERT_EQ(t, 3);
+  const MatrixXd P = filter.covariance();
+  const VectorXd x = filter.state();
+  const int n = filter.stateDim();
+  MatrixXd H = MatrixXd::Zero(2, n);
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, EkfSlam::landmarkIndex(t)) = -Matrix2::Identity();
+  const MatrixXd K = P * H.transpose() * (H * P * H.transpose()).inverse();
+  const VectorXd x_expected = x - K * (H * x);
+  const MatrixXd P_expected = P - K * H * P;
+  const int after_id = filter.landmarks()[t + 1].id;
+
+  ASSERT_EQ(filter.mergeLandmarks(filter.landmarks()[0].id, twin, 9.21), FilterStatus::kOk);
+  std::vector<int> keep;
+  for (int i = 0; i < n; ++i) {
+    if (i != EkfSlam::landmarkIndex(t) && i != EkfSlam::landmarkIndex(t) + 1) keep.push_back(i);
+  }
+  ASSERT_EQ(filter.stateDim(), n - 2);
+  EXPECT_EQ(filter.slotOf(twin), -1);
+  EXPECT_EQ(filter.slotOf(after_id), t);
+  EXPECT_LT((filter.state() - x_expected(keep)).cwiseAbs().maxCoeff(), 1e-12);
+  const MatrixXd P1 = filter.covariance();
+  EXPECT_LT((P1 - P_expected(keep, keep)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(P1, P1.transpose()) << "P must be exactly symmetric";
+  expectBlocksOfTheCovariance(filter);
+  expectTextbookUpdate(filter, {1, 3, 4});
 }
 
 TEST(EkfSlam, DistinctLandmarksAreNotMergedAndNothingChanges) {
