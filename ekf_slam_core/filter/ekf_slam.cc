@@ -483,6 +483,12 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
 void EkfSlam::reanchor(const Pose2& robot_correction,
                        const std::vector<std::pair<int, Pose2>>& landmark_corrections) {
   const int n = dim_;
+  // The stored upper triangle is only partly current: fill it from the
+  // lower one so that the row and column passes below see the whole P (a
+  // loop closure is rare; this O(n²) pass allocates nothing).
+  for (int c = 0; c < n; ++c) {
+    for (int r = c + 1; r < n; ++r) P_(c, r) = P_(r, c);
+  }
   // The rotation acting on each 2-row block (robot position, then each
   // landmark); identity where nothing moves.
   std::vector<Matrix2> rotation(1 + landmarkCount(), Matrix2::Identity());
