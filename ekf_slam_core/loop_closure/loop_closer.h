@@ -120,6 +120,10 @@ class LoopCloser {
   // Graph node `key` was taken at this scan (index in addScan order). Loop
   // edges are the graph's robust edges; the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
+  int keyCount() const { return static_cast<int>(keys_.size()); }
+  // A key scan's readings (≤ max_range, robot frame) and its scan's stamp.
+  const std::vector<Vector2>& keyPoints(int key) const { return keys_[key].points; }
+  double keyStamp(int key) const { return scans_[keys_[key].scan_index].stamp; }
 
  private:
   struct KeyScan {

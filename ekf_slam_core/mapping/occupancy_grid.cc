@@ -133,6 +133,17 @@ void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
   }
 }
 
+void OccupancyGrid::insertHits(const Vector2& origin, const std::vector<Vector2>& endpoints) {
+  if (!origin.allFinite()) return;
+  for (const Vector2& end : endpoints) {
+    if (!end.allFinite() || (end - origin).norm() > options_.max_insert_range) continue;
+    ensureContains(origin, end);
+    int x0, y0, x1, y1;
+    if (!cellOf(origin.x(), origin.y(), &x0, &y0) || !cellOf(end.x(), end.y(), &x1, &y1)) continue;
+    traceRay(x0, y0, x1, y1, /*mark_end=*/true);
+  }
+}
+
 double OccupancyGrid::probability(double x, double y) const {
   int ix, iy;
   if (!cellOf(x, y, &ix, &iy)) return 0.5;
@@ -150,6 +161,21 @@ std::vector<int8_t> OccupancyGrid::occupancyValues() const {
     if (!touched_[i]) continue;
     const double p = 1.0 - 1.0 / (1.0 + std::exp(static_cast<double>(log_odds_[i])));
     out[i] = static_cast<int8_t>(std::lround(100.0 * p));
+  }
+  return out;
+}
+
+std::vector<int8_t> OccupancyGrid::trinaryValues() const {
+  std::vector<int8_t> out(log_odds_.size(), -1);
+  const float occupied = static_cast<float>(logOdds(0.65));
+  const float free = static_cast<float>(logOdds(0.196));
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (!touched_[i]) continue;
+    if (log_odds_[i] > occupied) {
+      out[i] = 100;
+    } else if (log_odds_[i] < free) {
+      out[i] = 0;
+    }
   }
   return out;
 }

@@ -43,6 +43,10 @@ class OccupancyGrid {
   // time and doubled the peak memory.
   void cover(const Vector2& low, const Vector2& high) { ensureContains(low, high); }
 
+  // Inserts beams from `origin` that ended at `endpoints` (map frame): each
+  // a hit at its end, free space before it (a key scan's kept readings).
+  void insertHits(const Vector2& origin, const std::vector<Vector2>& endpoints);
+
   // Probability of occupancy of the cell containing (x, y); 0.5 when unknown
   // or outside.
   double probability(double x, double y) const;
@@ -56,6 +60,10 @@ class OccupancyGrid {
   // nav_msgs/OccupancyGrid data: row-major from cell (0, 0), −1 unknown,
   // else 0..100.
   std::vector<int8_t> occupancyValues() const;
+  // The same, decided as map_server decides a saved image (occupied above
+  // 0.65, free below 0.196, unknown between): every value is -1, 0 or 100,
+  // as amcl and the navigation stack expect of a published map.
+  std::vector<int8_t> trinaryValues() const;
 
   // map_server files: `<base>.pgm` and `<base>.yaml` (image referenced by its
   // file name). Returns an empty string on success, else the error.

@@ -129,3 +129,50 @@ TEST(OccupancyGrid, GrowingKeepsEarlierCells) {
 
 }  // namespace
 }  // namespace ekf_slam
+
+namespace ekf_slam {
+namespace {
+
+// Beams given by their end points (a key scan's readings): free before the
+// end, occupied at it, unknown beyond; readings past max_insert_range left out.
+TEST(OccupancyGrid, HitsGivenAsEndPointsMarkFreeSpaceAndTheEnd) {
+  OccupancyGridOptions options;
+  options.max_insert_range = 5.0;
+  OccupancyGrid grid(options);
+  grid.insertHits(Vector2(1.0, 1.0), {Vector2(3.0, 1.0), Vector2(1.0, 9.0)});
+  EXPECT_GT(grid.probability(3.01, 1.01), 0.5);
+  EXPECT_LT(grid.probability(2.0, 1.01), 0.5);
+  EXPECT_FALSE(grid.isKnown(3.6, 1.01));
+  EXPECT_FALSE(grid.isKnown(1.01, 4.0));  // the 8 m reading was not inserted
+}
+
+}  // namespace
+}  // namespace ekf_slam
+
+namespace ekf_slam {
+namespace {
+
+// Published maps hold only -1, 0 and 100, decided at map_server's thresholds.
+TEST(OccupancyGrid, TrinaryValuesAreUnknownFreeOrOccupied) {
+  OccupancyGrid grid;
+  const Vector2 origin(0.0, 0.0);
+  for (int k = 0; k < 5; ++k) grid.insertHits(origin, {Vector2(2.0, 0.01)});
+  grid.insertHits(origin, {Vector2(0.01, 1.0)});  // one sighting: p = 0.7 at its end
+  const std::vector<int8_t> values = grid.trinaryValues();
+  const std::vector<int8_t> probabilities = grid.occupancyValues();
+  int occupied = 0, free_cells = 0, unknown = 0;
+  for (size_t i = 0; i < values.size(); ++i) {
+    ASSERT_TRUE(values[i] == -1 || values[i] == 0 || values[i] == 100) << int(values[i]);
+    occupied += values[i] == 100;
+    free_cells += values[i] == 0;
+    unknown += values[i] == -1;
+    if (probabilities[i] > 65) EXPECT_EQ(values[i], 100);
+    if (probabilities[i] >= 0 && probabilities[i] < 19) EXPECT_EQ(values[i], 0);
+  }
+  EXPECT_EQ(occupied, 2);     // both ends (0.7 after one hit is above 0.65)
+  EXPECT_GT(free_cells, 30);  // the 2 m beam, passed 5 times (4 misses make a cell free)
+  EXPECT_GT(unknown, free_cells);
+}
+
+}  // namespace
+}  // namespace ekf_slam

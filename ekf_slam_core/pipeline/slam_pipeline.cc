@@ -152,6 +152,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
     r.odometry_at_iteration = last_odometry_;
     r.causal = causal;
+    out.causal_pose = causal;
     records_.push_back(r);
   };
 
@@ -189,11 +190,13 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     if (!odometry.allFinite()) {
       out.pose = filter_.pose();
       out.pose_covariance = filter_.poseCovariance();
+      out.causal_pose = out.pose;
       return out;  // no usable odometry: nothing to record against
     }
     out.pose = initialised_ ? deadReckoned(odometry) : Pose2();
     out.pose_covariance =
         initialised_ ? deadReckonedCovariance(odometry) : Matrix3(Matrix3::Zero());
+    out.causal_pose = out.pose;
     if (initialised_) record();
     return out;
   }
@@ -362,6 +365,19 @@ void SlamPipeline::reanchorFilter(const Pose2& causal, const Pose2& published) {
   filter_.reanchor(compose(causal, inverse(published)), corrections);
   key_filtered_ = std::move(key_map);
   ++counters_.reanchors;
+}
+
+std::vector<SlamPipeline::KeyScan> SlamPipeline::keyScans(bool with_points) const {
+  std::vector<KeyScan> out;
+  if (!loop_closer_ || !have_map_from_graph_) return out;
+  const PoseGraph& graph = loop_closer_->graph();
+  out.resize(loop_closer_->keyCount());
+  for (int k = 0; k < loop_closer_->keyCount(); ++k) {
+    out[k].stamp = loop_closer_->keyStamp(k);
+    out[k].pose = compose(map_from_graph_, graph.pose(k));
+    if (with_points) out[k].points = loop_closer_->keyPoints(k);
+  }
+  return out;
 }
 
 std::vector<StampedPose> SlamPipeline::causalScanPoses() const {

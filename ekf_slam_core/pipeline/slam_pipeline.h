@@ -94,6 +94,9 @@ struct ScanResult {
   // prediction would carry it, so a dead-reckoned pose is not reported as
   // certain as the iteration it hangs off.
   Matrix3 pose_covariance = Matrix3::Zero();
+  // The causal estimate for this scan (ScanRecord::causal): the loop-closed
+  // graph's with loop closure on, else `pose`. What a live node publishes.
+  Pose2 causal_pose;
   FeatureSet features;                         // what the extractor found (empty when not run)
   std::vector<PointObservation> observations;  // the landmark candidates used
   std::vector<int>
@@ -177,6 +180,20 @@ class SlamPipeline {
   std::vector<StampedPose> filteredScanPoses() const;
   // ScanRecord::causal for every scan: what a live run publishes.
   std::vector<StampedPose> causalScanPoses() const;
+
+  // The back end's key scans as they stand now (loop-closed, map frame),
+  // with their readings in the robot frame: for a live occupancy grid and
+  // the loop-closed path. Empty without loop closure.
+  struct KeyScan {
+    double stamp = 0.0;
+    Pose2 pose;
+    std::vector<Vector2> points;
+  };
+  std::vector<KeyScan> keyScans(bool with_points) const;
+  // Optimisations the back end has run: a change means new key-scan poses.
+  long backEndOptimisations() const {
+    return loop_closer_ ? loop_closer_->counters().optimisations : 0;
+  }
 
   // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
   // the final optimisation after the last scan; optimizedScanPoses() then

@@ -87,6 +87,12 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   association_publisher_ = node_.advertise<AssociationReport>("association", 10);
   smoothed_path_publisher_ = node_.advertise<nav_msgs::Path>("smoothed_path", 1, true);
   map_publisher_ = node_.advertise<nav_msgs::OccupancyGrid>("map", 1, /*latch=*/true);
+  loop_closed_path_publisher_ = node_.advertise<nav_msgs::Path>("loop_closed_path", 1, true);
+  if (params_.map_update_interval > 0.0 && config_.pipeline.loop_closure.enabled) {
+    live_map_ = std::make_unique<LiveMapPublisher>(node_, config_.map);
+    map_timer_ =
+        node_.createTimer(ros::Duration(params_.map_update_interval), &SlamNode::onMapTimer, this);
+  }
 
   services_.push_back(private_node_.advertiseService("pause", &SlamNode::onPause, this));
   services_.push_back(private_node_.advertiseService("resume", &SlamNode::onResume, this));
@@ -360,9 +366,16 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
 
   const ros::Time stamp = pending.header.stamp;
   last_scan_stamp_ = stamp;
-  map_to_odom_ = pipeline_->mapToOdom();
+  // The causal estimate: with loop closure on, the loop-closed graph as it
+  // stands after this scan (the filter is re-anchored to it after each
+  // loop); otherwise the filter's.
+  map_to_odom_ = compose(result.causal_pose, inverse(odometry));
   have_map_to_odom_ = true;
   publishMapToOdom(stamp);
+  if (pipeline_->backEndOptimisations() != optimisations_published_) {
+    optimisations_published_ = pipeline_->backEndOptimisations();
+    publishLoopClosedPath(stamp);
+  }
 
   std_msgs::Header map_header;
   map_header.stamp = stamp;
@@ -370,7 +383,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
 
   geometry_msgs::PoseWithCovarianceStamped pose;
   pose.header = map_header;
-  pose.pose.pose = toPoseMessage(result.pose);
+  pose.pose.pose = toPoseMessage(result.causal_pose);
   // (x, y, yaw) into the 6×6 (x, y, z, roll, pitch, yaw) layout; between
   // iterations the covariance has grown with the motion since the last one.
   const Matrix3 c = result.pose_covariance;
@@ -392,7 +405,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   }
   path_publisher_.publish(path_);
 
-  if (!odometry_anchor_) odometry_anchor_ = compose(result.pose, inverse(odometry));
+  if (!odometry_anchor_) odometry_anchor_ = compose(result.causal_pose, inverse(odometry));
   geometry_msgs::PoseStamped odometry_pose;
   odometry_pose.header = map_header;
   odometry_pose.pose = toPoseMessage(compose(*odometry_anchor_, odometry));
@@ -509,6 +522,20 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   } else {
     status.add("NIS 95% band", "no matches yet");
   }
+  status.add("scan matches refused (disagree with the wheels)",
+             counters.scan_match_odometry_refusals);
+  status.add("scan matches refused (all reasons)", counters.scan_match_refusals);
+  if (pipeline_ && pipeline_->loopCloser()) {
+    const LoopClosureCounters& loops = pipeline_->loopCloser()->counters();
+    status.add("key scans", loops.key_scans);
+    status.add("loops accepted", loops.accepted);
+    status.add("loop candidates refused", loops.refused);
+    status.add("filter re-anchored", counters.reanchors);
+  }
+  if (live_map_) {
+    status.add("maps published", live_map_->published());
+    status.add("last map build [s]", live_map_->lastBuildSeconds());
+  }
 
   if (paused_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused");
@@ -563,8 +590,45 @@ bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
   return true;
 }
 
+void SlamNode::publishLoopClosedPath(const ros::Time& data_stamp) {
+  nav_msgs::Path path;
+  path.header.stamp = data_stamp;
+  path.header.frame_id = params_.map_frame;
+  for (const SlamPipeline::KeyScan& key : pipeline_->keyScans(/*with_points=*/false)) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = ros::Time(key.stamp);
+    p.header.frame_id = params_.map_frame;
+    p.pose = toPoseMessage(key.pose);
+    path.poses.push_back(p);
+  }
+  loop_closed_path_publisher_.publish(path);
+}
+
+// A new grid when the key scans changed (a new key scan or a new
+// optimisation) and the worker is free; it never blocks the scans.
+void SlamNode::onMapTimer(const ros::TimerEvent&) {
+  if (!pipeline_ || !live_map_ || !laser_pose_) return;
+  const long optimisations = pipeline_->backEndOptimisations();
+  std::vector<SlamPipeline::KeyScan> keys = pipeline_->keyScans(/*with_points=*/true);
+  if (keys.empty() ||
+      (optimisations == optimisations_mapped_ && static_cast<int>(keys.size()) == keys_mapped_)) {
+    return;
+  }
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  const int count = static_cast<int>(keys.size());
+  if (live_map_->submit(std::move(keys), *laser_pose_, header)) {
+    optimisations_mapped_ = optimisations;
+    keys_mapped_ = count;
+  }
+}
+
 void SlamNode::resetState() {
   pipeline_.reset();
+  optimisations_published_ = 0;
+  optimisations_mapped_ = -1;
+  keys_mapped_ = 0;
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
   queue_.clear();
   last_accepted_stamp_.reset();
@@ -683,16 +747,7 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     return true;
   }
 
-  nav_msgs::OccupancyGrid map;
-  map.header = header;
-  map.info.map_load_time = header.stamp;
-  map.info.resolution = static_cast<float>(grid.resolution());
-  map.info.width = grid.width();
-  map.info.height = grid.height();
-  map.info.origin.position.x = grid.origin().x();
-  map.info.origin.position.y = grid.origin().y();
-  map.info.origin.orientation.w = 1.0;
-  map.data = grid.occupancyValues();
+  const nav_msgs::OccupancyGrid map = toOccupancyGridMessage(grid, header);
   map_publisher_.publish(map);
 
   std::ostringstream text;

@@ -41,6 +41,7 @@
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 #include "ekf_slam_ros/offline/slam_config.h"
+#include "ekf_slam_ros/slam_node/live_map.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 
 namespace ekf_slam {
@@ -89,6 +90,8 @@ class SlamNode {
 
   void createPipeline(const Pose2& laser_pose);
   void publishMapToOdom(const ros::Time& data_stamp);
+  void publishLoopClosedPath(const ros::Time& data_stamp);
+  void onMapTimer(const ros::TimerEvent&);
   void publishLandmarkMap(const std_msgs::Header& header);
   void onTfTimer(const ros::TimerEvent&);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -112,9 +115,14 @@ class SlamNode {
 
   ros::Subscriber input_subscriber_;
   ros::Publisher pose_publisher_, path_publisher_, landmarks_publisher_, landmark_map_publisher_,
-      association_publisher_, smoothed_path_publisher_, map_publisher_, odometry_path_publisher_;
+      association_publisher_, smoothed_path_publisher_, map_publisher_, odometry_path_publisher_,
+      loop_closed_path_publisher_;
   std::vector<ros::ServiceServer> services_;
-  ros::Timer tf_timer_, drain_timer_, diagnostic_timer_;
+  ros::Timer tf_timer_, drain_timer_, diagnostic_timer_, map_timer_;
+  std::unique_ptr<LiveMapPublisher> live_map_;  // null when map_update_interval is 0
+  long optimisations_published_ = 0;            // back-end optimisations seen by the path
+  long optimisations_mapped_ = -1;              // … and by the last grid handed to live_map_
+  int keys_mapped_ = 0;                         // key scans in that grid
   diagnostic_updater::Updater diagnostics_;
 
   // SLAM state. The pipeline is created at the first scan, when the laser

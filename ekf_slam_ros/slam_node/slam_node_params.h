@@ -36,6 +36,9 @@ struct SlamNodeParams {
   std::string initial_map;             // landmark map file loaded at start ("" none)
   double diagnostic_period = 1.0;      // s
   int path_max_poses = 10000;          // newest poses in `path` (0: all); the smoother keeps all
+  // s between occupancy grids on `map`, built in the background from the
+  // loop-closed key scans (0: only on ~smooth). Needs loop closure on.
+  double map_update_interval = 5.0;
 };
 
 // False with `error` naming the key (resolved name) on a bad or unknown key.

@@ -1,0 +1,112 @@
+#include "ekf_slam_ros/slam_node/live_map.h"
+
+#include <chrono>
+#include <limits>
+#include <utility>
+
+namespace ekf_slam {
+
+nav_msgs::OccupancyGrid toOccupancyGridMessage(const OccupancyGrid& grid,
+                                               const std_msgs::Header& header) {
+  nav_msgs::OccupancyGrid map;
+  map.header = header;
+  map.info.map_load_time = header.stamp;
+  map.info.resolution = static_cast<float>(grid.resolution());
+  map.info.width = grid.width();
+  map.info.height = grid.height();
+  map.info.origin.position.x = grid.origin().x();
+  map.info.origin.position.y = grid.origin().y();
+  map.info.origin.orientation.w = 1.0;
+  map.data = grid.trinaryValues();
+  return map;
+}
+
+OccupancyGrid gridFromKeyScans(const std::vector<SlamPipeline::KeyScan>& keys, const Pose2& laser,
+                               const OccupancyGridOptions& options) {
+  OccupancyGrid grid(options);
+  Vector2 low = Vector2::Constant(std::numeric_limits<double>::infinity());
+  Vector2 high = -low;
+  for (const SlamPipeline::KeyScan& key : keys) {
+    if (!key.pose.allFinite()) continue;
+    low = low.cwiseMin(key.pose.translation());
+    high = high.cwiseMax(key.pose.translation());
+  }
+  if (!low.allFinite()) return grid;
+  const Vector2 reach = Vector2::Constant(options.max_insert_range);
+  grid.cover(low - reach, high + reach);
+  std::vector<Vector2> ends;
+  for (const SlamPipeline::KeyScan& key : keys) {
+    if (!key.pose.allFinite()) continue;
+    ends.clear();
+    for (const Vector2& p : key.points) ends.push_back(transformFrom(key.pose, p));
+    grid.insertHits(transformFrom(key.pose, laser.translation()), ends);
+  }
+  return grid;
+}
+
+LiveMapPublisher::LiveMapPublisher(ros::NodeHandle node, const OccupancyGridOptions& options)
+    : options_(options),
+      map_publisher_(node.advertise<nav_msgs::OccupancyGrid>("map", 1, /*latch=*/true)),
+      metadata_publisher_(node.advertise<nav_msgs::MapMetaData>("map_metadata", 1, true)),
+      worker_([this] { run(); }) {}
+
+LiveMapPublisher::~LiveMapPublisher() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  worker_.join();
+}
+
+bool LiveMapPublisher::submit(std::vector<SlamPipeline::KeyScan> keys, const Pose2& laser,
+                              const std_msgs::Header& header) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (pending_) return false;
+    keys_ = std::move(keys);
+    laser_ = laser;
+    header_ = header;
+    pending_ = true;
+  }
+  wake_.notify_all();
+  return true;
+}
+
+long LiveMapPublisher::published() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return published_;
+}
+
+double LiveMapPublisher::lastBuildSeconds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return last_build_seconds_;
+}
+
+void LiveMapPublisher::run() {
+  for (;;) {
+    std::vector<SlamPipeline::KeyScan> keys;
+    Pose2 laser;
+    std_msgs::Header header;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stop_ || pending_; });
+      if (stop_) return;
+      keys.swap(keys_);
+      laser = laser_;
+      header = header_;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const nav_msgs::OccupancyGrid map =
+        toOccupancyGridMessage(gridFromKeyScans(keys, laser, options_), header);
+    map_publisher_.publish(map);
+    metadata_publisher_.publish(map.info);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++published_;
+    last_build_seconds_ =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    pending_ = false;
+  }
+}
+
+}  // namespace ekf_slam
