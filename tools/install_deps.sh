@@ -15,7 +15,7 @@ PACKAGES=(
   # the messages the Python tools and rostests import (the -dev packages
   # above are C++ only)
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-nav-msgs
-  python3-sensor-msgs python3-diagnostic-msgs
+  python3-sensor-msgs python3-diagnostic-msgs python3-tf2-msgs
   # libraries
   libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
   # figures

@@ -4,6 +4,8 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
+#include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
@@ -54,6 +56,11 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
   const std::string odom_frame = stripSlash(options.odom_frame);
   const std::string base_frame = stripSlash(options.base_frame);
   std::vector<std::pair<std::string, Pose2>> static_children;  // base_frame → child
+  // odometry_source tf: the transforms also go into a tf2 buffer holding the
+  // whole log, and each scan's odometry is looked up there as the live node
+  // looks it up (tf2's interpolation, the same doubles), so that a replay
+  // of the bag through the node and this runner see identical inputs.
+  tf2::BufferCore tf_buffer(ros::Duration(1.0e7));
   try {
     rosbag::Bag bag;
     bag.open(path, rosbag::bagmode::Read);
@@ -65,6 +72,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         if (!msg) return path + ": topic " + topic + " is not sensor_msgs/LaserScan";
         LoggedScan s;
         s.seq = msg->header.seq;
+        s.stamp_ns = static_cast<int64_t>(msg->header.stamp.toNSec());
         s.scan = ros_conversions::fromLaserScan(*msg);
         if (data.laser_frame.empty()) data.laser_frame = stripSlash(msg->header.frame_id);
         data.scans.push_back(std::move(s));
@@ -86,6 +94,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
                            yawOf(r.x, r.y, r.z, r.w));
           if (options.odometry_source == "tf" && parent == odom_frame && child == base_frame) {
             track.add(t.header.stamp.toSec(), pose);
+            tf_buffer.setTransform(t, "bag");
           } else if (parent == base_frame) {
             static_children.emplace_back(child, pose);
           }
@@ -121,6 +130,21 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
                      [](const LoggedScan& a, const LoggedScan& b) { return a.seq < b.seq; });
   }
   finish(&data, track, options.max_odometry_gap);
+  if (options.odometry_source == "tf") {
+    for (LoggedScan& s : data.scans) {
+      try {
+        ros::Time stamp;
+        stamp.fromNSec(static_cast<uint64_t>(s.stamp_ns));
+        const geometry_msgs::TransformStamped t =
+            tf_buffer.lookupTransform(odom_frame, base_frame, stamp);
+        const auto& r = t.transform.rotation;
+        s.odometry =
+            Pose2(t.transform.translation.x, t.transform.translation.y, yawOf(r.x, r.y, r.z, r.w));
+      } catch (const tf2::TransformException&) {
+        // Before the first or after the last sample: the track's nearest.
+      }
+    }
+  }
   *out = std::move(data);
   return "";
 }

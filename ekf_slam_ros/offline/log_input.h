@@ -24,7 +24,8 @@ namespace ekf_slam {
 struct LoggedScan {
   uint32_t seq = 0;
   Scan scan;
-  Pose2 odometry;  // odom → base_link at scan.stamp
+  Pose2 odometry;        // odom → base_link at scan.stamp
+  int64_t stamp_ns = 0;  // the scan's header stamp exactly (ns)
 };
 
 struct LogData {
