@@ -1,5 +1,7 @@
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 
+#include "ekf_slam_core/filter/chi_square.h"
+
 #include <Eigen/Dense>
 #include <chrono>
 #include <cmath>
@@ -46,6 +48,9 @@ std::string LoopClosureOptions::validate() const {
   if (!(loop_sigma_rotation > 0.0)) return "loop_sigma_rotation must be > 0 (rad)";
   if (!(min_final_weight >= 0.0 && min_final_weight <= 1.0)) {
     return "min_final_weight must be in [0, 1]";
+  }
+  if (!(consistency_probability >= 0.0 && consistency_probability < 1.0)) {
+    return "consistency_probability must be in [0, 1)";
   }
   error = optimizer.validate();
   if (!error.empty()) return "optimizer: " + error;
@@ -169,21 +174,47 @@ void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& fro
     next_attempt_ = index + options_.retry_interval;
     return;
   }
-  ++counters_.accepted;
+  if (!addLoopEdge(candidate, index, relative)) next_attempt_ = index + options_.retry_interval;
+}
+
+bool LoopCloser::addLoop(int from, int to, const Pose2& relative) {
+  const int keys = static_cast<int>(keys_.size());
+  if (from < 0 || to < 0 || from >= keys || to >= keys || from == to || !relative.allFinite()) {
+    return false;
+  }
+  return addLoopEdge(from, to, relative);
+}
+
+bool LoopCloser::addLoopEdge(int from, int to, const Pose2& relative) {
   PoseGraphEdge loop;
-  loop.from = candidate;
-  loop.to = index;
+  loop.from = from;
+  loop.to = to;
   loop.measurement = relative;
   loop.information =
       diagonalInformation(options_.loop_sigma_translation, options_.loop_sigma_rotation);
   // Enters at full weight (it passed the scan evidence); the kernel judges
   // it in later optimisations, against the loops that follow.
   loop.robust = false;
+  const std::vector<Pose2> before = graph_.poses();
   const int edge_index = graph_.addEdge(loop);
-  adjacency_[candidate].emplace_back(index, 0.0);
-  adjacency_[index].emplace_back(candidate, 0.0);
-  optimise();
+  const double loop_chi2 = graph_.edgeChi2(edge_index);
+  const PoseGraphSummary summary = optimise();
+  if (options_.consistency_probability > 0.0) {
+    // The graph's cost without the loop, at the poses before this
+    // optimisation, against its optimised cost with it.
+    const double rise = summary.final_cost - (summary.initial_cost - loop_chi2);
+    if (rise > chiSquareQuantile(options_.consistency_probability, 3.0)) {
+      graph_.setEdgeActive(edge_index, false);
+      for (int n = 0; n < static_cast<int>(before.size()); ++n) graph_.setPose(n, before[n]);
+      ++counters_.inconsistent;
+      return false;
+    }
+  }
+  ++counters_.accepted;
+  adjacency_[from].emplace_back(to, 0.0);
+  adjacency_[to].emplace_back(from, 0.0);
   graph_.setEdgeRobust(edge_index, true);
+  return true;
 }
 
 // Dijkstra from `from`: travel along sequential edges, zero across loops.
@@ -282,11 +313,12 @@ bool LoopCloser::verify(int candidate, int key, double distance, Pose2* relative
   return true;
 }
 
-void LoopCloser::optimise() {
+PoseGraphSummary LoopCloser::optimise() {
   const auto start = std::chrono::steady_clock::now();
-  graph_.optimize(options_.optimizer);
+  const PoseGraphSummary summary = graph_.optimize(options_.optimizer);
   ++counters_.optimisations;
   counters_.optimisation_seconds += secondsSince(start);
+  return summary;
 }
 
 void LoopCloser::finish() {

@@ -76,6 +76,13 @@ struct LoopClosureOptions {
   double loop_sigma_translation = 0.05;  // m
   double loop_sigma_rotation = 0.01;     // rad
   double min_final_weight = 0.1;  // loops the kernel weighs below this are dropped at the end
+  // Consistency test of a new loop against the graph: the rise of the
+  // graph's optimised cost when the loop is added (for Gaussian errors, the
+  // loop's squared Mahalanobis distance from what the chain of sequential
+  // edges and the earlier loops predict) must stay below this χ²₃
+  // quantile, else the loop is refused and the graph restored. A false loop
+  // then never bends the map, whatever its scan score (0: no test).
+  double consistency_probability = 0.9999999;  // χ²₃ quantile about 36
   // In the pipeline: after each optimisation the EKF takes the loop-closed
   // geometry (robot and landmarks move with their key scans).
   bool reanchor_filter = true;
@@ -86,10 +93,11 @@ struct LoopClosureOptions {
 
 struct LoopClosureCounters {
   long key_scans = 0;
-  long candidates = 0;  // verifications attempted
-  long accepted = 0;    // loop edges added
-  long refused = 0;     // failed verification
-  long dropped = 0;     // loop edges the kernel rejected at the end
+  long candidates = 0;    // verifications attempted
+  long accepted = 0;      // loop edges added
+  long refused = 0;       // failed verification
+  long dropped = 0;       // loop edges the kernel rejected at the end
+  long inconsistent = 0;  // loops refused by the consistency test (not in `accepted`)
   long optimisations = 0;
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;
@@ -104,6 +112,15 @@ class LoopCloser {
   // without usable geometry (usable = false) never becomes a key scan.
   void addScan(double stamp, const Scan& scan, const Pose2& laser_pose, const Pose2& front_end,
                bool usable);
+
+  // A loop found outside this closer (another place recognition, a human,
+  // a test): key scan `to` seen from key scan `from` at `relative`. It is
+  // handled as a verified loop: it enters at full weight, the graph is
+  // optimised, and from then on the Cauchy kernel judges it against the
+  // other loops (finish() drops it if they disagree). False when a key
+  // index is out of range, the two are the same, or the consistency test
+  // refused it.
+  bool addLoop(int from, int to, const Pose2& relative);
 
   // Final optimisation: drops the loops the kernel rejects, re-optimises.
   void finish();
@@ -141,12 +158,14 @@ class LoopCloser {
   };
 
   void addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end);
+  // False when the consistency test refused it (the graph is then as before).
+  bool addLoopEdge(int from, int to, const Pose2& relative);
   std::vector<double> graphDistances(int from) const;
   int pickCandidate(int key, const std::vector<double>& distance) const;
   bool verify(int candidate, int key, double distance, Pose2* relative);
   double searchRadius(double graph_distance) const;  // m
   double searchAngle(double graph_distance) const;   // rad
-  void optimise();
+  PoseGraphSummary optimise();
 
   LoopClosureOptions options_;
   ScanMatcherOptions icp_;

@@ -97,8 +97,10 @@ struct LoopRun {
 };
 
 // The front end turns 0.4 deg too far per metre: after a lap of 28 m the
-// heading is 11 deg off and the position metres.
-LoopRun runTwoLaps(bool enabled) {
+// heading is 11 deg off and the position metres. `false_loops` wrong loops
+// are injected during the second lap, each claiming that the newest key
+// scan is where a key scan on the far side of the circle was.
+LoopRun runTwoLaps(bool enabled, int false_loops = 0) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(11);
   LoopRun run;
@@ -114,6 +116,12 @@ LoopRun runTwoLaps(bool enabled) {
     }
     run.front_end.push_back(front_end);
     closer.addScan(0.1 * i, sweep(world, run.truth[i], &rng), Pose2(), front_end, true);
+    const size_t second_lap = run.truth.size() / 2;
+    if (false_loops > 0 && i > second_lap && (i - second_lap) % 40 == 0 &&
+        static_cast<int>((i - second_lap) / 40) <= false_loops) {
+      const int newest = closer.keyCount() - 1;
+      EXPECT_FALSE(closer.addLoop(newest / 4, newest, Pose2(0.2, 0.0, 0.1)));
+    }
     run.causal.push_back(closer.latestPose());
     run.accepted_by.push_back(closer.counters().accepted);
   }
@@ -164,6 +172,24 @@ TEST(LoopCloser, CausalPoseFollowsTheFrontEndUntilTheFirstLoopThenTheClosedGraph
     front_end_error += positionError(run.front_end[i], run.truth[i]);
   }
   EXPECT_LT(causal_error, 0.25 * front_end_error);
+}
+
+// Five wrong loops injected among the true ones (each claims that the
+// newest key scan is where one a quarter of the way round was) fail the
+// consistency test against the graph and are refused: the trajectory is
+// the one without them. (Entering at full weight, they bent the map by
+// 0.85 m and pushed the true loops out of their search windows.)
+TEST(LoopCloser, InjectedFalseLoopsAreRefusedAndChangeNothing) {
+  const LoopRun clean = runTwoLaps(/*enabled=*/true);
+  const LoopRun injected = runTwoLaps(/*enabled=*/true, /*false_loops=*/5);
+  EXPECT_EQ(injected.counters.accepted, clean.counters.accepted);
+  EXPECT_EQ(injected.counters.inconsistent, clean.counters.inconsistent + 5);
+  double worst = 0.0;
+  for (size_t i = 0; i < clean.closed.size(); ++i) {
+    worst = std::max(worst, positionError(injected.closed[i], clean.closed[i]));
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(positionError(injected.closed.back(), injected.truth.back()), 0.15);
 }
 
 TEST(LoopCloser, DisabledKeepsTheFrontEndTrajectory) {

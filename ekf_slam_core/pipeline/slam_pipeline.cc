@@ -125,7 +125,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   auto record = [&]() {
     Pose2 causal = out.pose;
     if (loop_closer_ && scan != nullptr) {
-      const long optimisations = loop_closer_->counters().optimisations;
+      const long loops = loop_closer_->counters().accepted;
       loop_closer_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
       record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
       const Pose2 graph_pose = loop_closer_->latestPose();
@@ -135,8 +135,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       }
       causal = compose(map_from_graph_, graph_pose);
       trackKeyScans(out);
-      if (loop_closer_->counters().optimisations != optimisations &&
-          options_.loop_closure.reanchor_filter) {
+      if (loop_closer_->counters().accepted != loops && options_.loop_closure.reanchor_filter) {
         reanchorFilter(causal, out.pose);
         const bool iterated = out.outcome == ScanOutcome::kIterated;
         out.pose = iterated ? filter_.pose() : deadReckoned(odometry);

@@ -129,6 +129,7 @@ void bindLoopClosure(YamlBinder b, LoopClosureOptions* l) {
   b.number("loop_sigma_translation", &l->loop_sigma_translation, 1e-6, 100.0);
   b.number("loop_sigma_rotation", &l->loop_sigma_rotation, 1e-6, kPi);
   b.number("min_final_weight", &l->min_final_weight, 0.0, 1.0);
+  b.number("consistency_probability", &l->consistency_probability, 0.0, 0.999999999);
   b.boolean("reanchor_filter", &l->reanchor_filter);
   YamlBinder o = b.child("optimizer");
   o.integer("max_iterations", &l->optimizer.max_iterations, 1, 10000);

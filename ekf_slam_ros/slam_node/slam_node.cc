@@ -530,6 +530,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("key scans", loops.key_scans);
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);
+    status.add("loops refused as inconsistent", loops.inconsistent);
     status.add("filter re-anchored", counters.reanchors);
   }
   if (live_map_) {
