@@ -7,6 +7,8 @@
 
 #include <sensor_msgs/LaserScan.h>
 
+#include <string>
+
 #include "ekf_slam_core/sensors/scan.h"
 
 namespace ekf_slam {
@@ -15,6 +17,13 @@ namespace ros_conversions {
 // The scan in the message's own (laser) frame; stamp = header.stamp in
 // seconds (data time, never the time of conversion).
 Scan fromLaserScan(const sensor_msgs::LaserScan& message);
+
+// Empty when the number of ranges fits the angle fields, that is
+// (angle_max − angle_min) / angle_increment + 1 to within one reading
+// (drivers differ on whether angle_max is the last beam's angle), else a
+// message naming both numbers. Fields that give no count (a zero or
+// non-finite increment) are left to validateScan.
+std::string rangeCountError(const sensor_msgs::LaserScan& message);
 
 }  // namespace ros_conversions
 }  // namespace ekf_slam

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
 namespace ekf_slam {
@@ -31,6 +32,28 @@ TEST(ScanConversion, CopiesGeometryStampAndEveryReading) {
   EXPECT_FALSE(scan.isValid(3));
   EXPECT_TRUE(scan.isValid(4));
   EXPECT_EQ(validateScan(scan), "");
+}
+
+// 181 beams over ±90°: the count fits whether angle_max is the last beam's
+// angle or one increment beyond; ten readings short or long it does not,
+// and the message names both numbers.
+TEST(ScanConversion, ARangeCountThatDisagreesWithTheAnglesIsNamed) {
+  sensor_msgs::LaserScan message;
+  message.angle_min = -M_PI / 2;
+  message.angle_increment = M_PI / 180;
+  message.angle_max = M_PI / 2;
+  message.ranges.assign(181, 2.0f);
+  EXPECT_EQ(ros_conversions::rangeCountError(message), "");
+  message.ranges.assign(180, 2.0f);
+  EXPECT_EQ(ros_conversions::rangeCountError(message), "");
+  message.ranges.assign(171, 2.0f);
+  const std::string error = ros_conversions::rangeCountError(message);
+  EXPECT_NE(error.find("171 ranges"), std::string::npos) << error;
+  EXPECT_NE(error.find("give 181"), std::string::npos) << error;
+  message.ranges.assign(191, 2.0f);
+  EXPECT_NE(ros_conversions::rangeCountError(message), "");
+  message.angle_increment = 0.0f;  // no count to compare: validateScan's case
+  EXPECT_EQ(ros_conversions::rangeCountError(message), "");
 }
 
 }  // namespace

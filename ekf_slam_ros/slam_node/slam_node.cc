@@ -188,7 +188,8 @@ void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
   std::ostringstream detail;
   detail.setf(std::ios::fixed);
   detail.precision(3);
-  const std::string geometry = validateScan(*pending.scan);
+  std::string geometry = ros_conversions::rangeCountError(*message);
+  if (geometry.empty()) geometry = validateScan(*pending.scan);
   if (!geometry.empty()) {
     detail << "scan at " << message->header.stamp.toSec() << ": " << geometry;
     drop(DropReason::kBadScanGeometry, detail.str());
