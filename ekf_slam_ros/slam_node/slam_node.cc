@@ -17,13 +17,10 @@ namespace ekf_slam {
 namespace {
 
 constexpr DropReason kAllReasons[] = {
-    DropReason::kStampNotIncreasing,
-    DropReason::kTooFewValidReadings,
-    DropReason::kBadScanGeometry,
-    DropReason::kOdomTransformMissing,
-    DropReason::kLaserTransformMissing,
-    DropReason::kQueueOverflow,
-    DropReason::kPaused,
+    DropReason::kStampNotIncreasing,   DropReason::kStampInFuture,
+    DropReason::kTooFewValidReadings,  DropReason::kBadScanGeometry,
+    DropReason::kOdomTransformMissing, DropReason::kLaserTransformMissing,
+    DropReason::kQueueOverflow,        DropReason::kPaused,
     DropReason::kBadFeatures,
 };
 
@@ -46,6 +43,8 @@ const char* toString(DropReason reason) {
   switch (reason) {
     case DropReason::kStampNotIncreasing:
       return "stamp not increasing";
+    case DropReason::kStampInFuture:
+      return "stamp in the future";
     case DropReason::kTooFewValidReadings:
       return "too few valid readings";
     case DropReason::kBadScanGeometry:
@@ -229,6 +228,20 @@ void SlamNode::onFeatures(const Features::ConstPtr& message) {
 
 void SlamNode::enqueue(PendingInput pending) {
   const ros::Time stamp = pending.header.stamp;
+  // A stamp far ahead of the clock (a driver's clock jump, a corrupt
+  // header) must never become the reference later scans are compared
+  // with: it would stop mapping until the clock caught up.
+  const ros::Time now = ros::Time::now();
+  if (!now.isZero() && (stamp - now).toSec() > params_.max_future_stamp) {
+    std::ostringstream detail;
+    detail.setf(std::ios::fixed);
+    detail.precision(3);
+    detail << "scan stamp " << stamp.toSec() << " is " << (stamp - now).toSec()
+           << " s ahead of the clock " << now.toSec() << " (max_future_stamp "
+           << params_.max_future_stamp << " s); the map is not touched";
+    drop(DropReason::kStampInFuture, detail.str());
+    return;
+  }
   if (last_accepted_stamp_ && !(stamp > *last_accepted_stamp_)) {
     std::ostringstream detail;
     detail.setf(std::ios::fixed);

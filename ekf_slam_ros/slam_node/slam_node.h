@@ -49,6 +49,7 @@ namespace ekf_slam {
 // Why an input was not used; each reason is a counter on /diagnostics.
 enum class DropReason {
   kStampNotIncreasing,     // stamp not after the last accepted scan's
+  kStampInFuture,          // stamp more than max_future_stamp ahead of the clock
   kTooFewValidReadings,    // NaN / no-return scan
   kBadScanGeometry,        // angle_increment 0, NaN angles, ...
   kOdomTransformMissing,   // odom → base_link not available at the stamp within tf_timeout

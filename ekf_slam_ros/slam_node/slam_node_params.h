@@ -39,6 +39,9 @@ struct SlamNodeParams {
   // s between occupancy grids on `map`, built in the background from the
   // loop-closed key scans (0: only on ~smooth). Needs loop closure on.
   double map_update_interval = 5.0;
+  // s: a scan stamped further ahead of the clock (ros::Time::now(), sim
+  // time included) is refused and counted, and never becomes the reference.
+  double max_future_stamp = 1.0;
 };
 
 // False with `error` naming the key (resolved name) on a bad or unknown key.

@@ -360,6 +360,7 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   const double past_before = observer_.diagnostic("dropped: stamp not increasing");
   const double laser_before = observer_.diagnostic("dropped: laser transform missing");
   const double geometry_before = observer_.diagnostic("dropped: bad scan geometry");
+  const double future_before = observer_.diagnostic("dropped: stamp in the future");
   const double iterations_before = observer_.diagnostic("iterations");
   ASSERT_FALSE(std::isnan(nan_before));
 
@@ -369,9 +370,12 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   });
   // 2. A good-looking scan stamped 1 s before the last one.
   robot_.publishScan(robot_.lastGoodStamp() - ros::Duration(1.0), [](std::vector<float>*) {});
-  // 3. A scan ten readings short of what its angle fields give.
+  // 3. A scan stamped 10⁶ s ahead of the clock: refused, and not the
+  // reference for the later scans (mapping resumes below).
+  robot_.publishScan(ros::Time::now() + ros::Duration(1.0e6), [](std::vector<float>*) {});
+  // 4. A scan ten readings short of what its angle fields give.
   robot_.publishScan(ros::Time::now(), [](std::vector<float>* r) { r->resize(r->size() - 10); });
-  // 4. Scans while base_link → laser is missing (odom → base_link still there).
+  // 5. Scans while base_link → laser is missing (odom → base_link still there).
   robot_.publish_laser_tf = false;
   ros::WallDuration(0.5).sleep();  // the last laser transform is now older than any new scan
   for (int i = 0; i < 5; ++i) {
@@ -387,6 +391,8 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   EXPECT_GE(observer_.diagnostic("dropped: stamp not increasing"), past_before + 1);
   EXPECT_GE(observer_.diagnostic("dropped: laser transform missing"), laser_before + 5);
   EXPECT_GE(observer_.diagnostic("dropped: bad scan geometry"), geometry_before + 1);
+  EXPECT_GE(observer_.diagnostic("dropped: stamp in the future"), future_before + 1);
+  EXPECT_TRUE(observer_.logged("stamp in the future", "ahead of the clock"));
   EXPECT_TRUE(observer_.logged("bad scan geometry", "171 ranges"))
       << "the log must name the range count and what the angles give";
   EXPECT_EQ(observer_.diagnostic("iterations"), iterations_before);
