@@ -1,11 +1,15 @@
 # Two commands a user needs (see README.md): `make demo` and `make test`.
-# Both install missing Debian packages, create a catkin workspace under
-# .build/ (ignored by git) that links to this checkout, and build there.
+# Both install missing Debian packages, create a catkin workspace that links
+# to this checkout, and build there. The workspaces live outside the source
+# tree (under $XDG_CACHE_HOME, one folder per checkout), so that nothing
+# inside the package links back to it: rosrun then finds exactly one copy of
+# each executable. `.build/setup.bash` sources the development workspace.
 
 SHELL := /bin/bash
 ROOT  := $(CURDIR)
-WS    ?= $(ROOT)/.build/ws
-BENCH_WS ?= $(ROOT)/.build/bench_ws
+CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/ekf_slam/$(shell printf %s '$(ROOT)' | md5sum | cut -c1-12)
+WS    ?= $(CACHE)/ws
+BENCH_WS ?= $(CACHE)/bench_ws
 JOBS  ?= 2
 OUT   ?= $(ROOT)/output
 RVIZ  ?= 0
@@ -23,8 +27,11 @@ deps:
 	@tools/install_deps.sh
 
 workspace:
-	@mkdir -p $(WS)/src
+	@for d in ws bench_ws; do if [ -d $(ROOT)/.build/$$d ]; then \
+	  echo "make: removing .build/$$d (the workspaces now live in $(CACHE))"; rm -rf $(ROOT)/.build/$$d; fi; done
+	@mkdir -p $(WS)/src $(ROOT)/.build
 	@if [ ! -e $(WS)/src/ekf_slam ]; then ln -s $(ROOT) $(WS)/src/ekf_slam; fi
+	@printf '# Sources the development workspace of this checkout (made by make).\nsource %s/devel/setup.bash\n' '$(WS)' > $(ROOT)/.build/setup.bash
 
 build: deps workspace
 	@cd $(WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) > $(WS)/build.log 2>&1 \
@@ -63,4 +70,4 @@ format:
 	@tools/check_format.sh --fix
 
 clean:
-	rm -rf $(ROOT)/.build
+	rm -rf $(ROOT)/.build $(CACHE)
