@@ -1,0 +1,140 @@
+#!/usr/bin/python3
+"""Replays a log through the live node faster than real time and reports
+whether it keeps up.
+
+Starts its own roscore (port --port) with use_sim_time, slam.launch pinned to
+one core (taskset -c --core), and `rosbag play --clock -r RATE`. Measures
+on the wall clock:
+- per-scan latency: from the scan's arrival on /scan to the arrival of the
+  pose the node publishes for it (same stamp): conversion, tf wait, the
+  pipeline (features, scan matching, filter, back end), publication;
+- the largest gap between two map -> odom transforms on /tf;
+- the map thread: grids published, and the last build time (/diagnostics);
+- scans the node dropped (every "dropped: ..." counter) and scans it never
+  answered.
+
+usage (after make build, with the workspace sourced):
+  source .build/setup.bash
+  tools/realtime_replay.py [--bag ../shared/datasets/intel.orig.bag] [--rate 5] [--core 0]
+"""
+import argparse
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from sensor_msgs.msg import LaserScan
+from tf2_msgs.msg import TFMessage
+
+
+def percentile(values, p):
+    if not values:
+        return float("nan")
+    s = sorted(values)
+    k = min(len(s) - 1, max(0, int(math.ceil(p / 100.0 * len(s))) - 1))
+    return s[k]
+
+
+class Probe:
+    def __init__(self):
+        self.scan_wall = {}  # stamp (ns) -> wall time of arrival
+        self.latency = []  # s
+        self.tf_wall = []
+        self.drops = {}
+        self.maps = 0
+        self.map_build = float("nan")
+        self.scans = 0
+        rospy.Subscriber("scan", LaserScan, self.on_scan, queue_size=10000)
+        rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
+        rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
+
+    def on_scan(self, msg):
+        self.scans += 1
+        self.scan_wall[msg.header.stamp.to_nsec()] = time.monotonic()
+
+    def on_pose(self, msg):
+        sent = self.scan_wall.pop(msg.header.stamp.to_nsec(), None)
+        if sent is not None:
+            self.latency.append(time.monotonic() - sent)
+
+    def on_tf(self, msg):
+        for t in msg.transforms:
+            if t.header.frame_id == "map" and t.child_frame_id == "odom":
+                self.tf_wall.append(time.monotonic())
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            for kv in status.values:
+                if kv.key.startswith("dropped: ") and kv.key != "dropped: paused":
+                    self.drops[kv.key] = int(float(kv.value))
+                elif kv.key == "maps published":
+                    self.maps = int(float(kv.value))
+                elif kv.key == "last map build [s]":
+                    self.map_build = float(kv.value)
+
+
+def main():
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--bag", default=os.path.join(root, "..", "shared", "datasets",
+                                                      "intel.orig.bag"))
+    parser.add_argument("--rate", type=float, default=5.0)
+    parser.add_argument("--core", type=int, default=0)
+    parser.add_argument("--port", type=int, default=11472)
+    parser.add_argument("--seconds", type=float, default=0.0, help="play only this much (0: all)")
+    args = parser.parse_args()
+    if not os.path.exists(args.bag):
+        sys.exit("realtime_replay: %s not found" % args.bag)
+
+    env = dict(os.environ, ROS_MASTER_URI="http://localhost:%d" % args.port)
+    os.environ.update(env)
+    procs = [subprocess.Popen(["roscore", "-p", str(args.port)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              preexec_fn=os.setsid)]
+    try:
+        time.sleep(3.0)
+        subprocess.check_call(["rosparam", "set", "use_sim_time", "true"], env=env)
+        procs.append(subprocess.Popen(
+            ["taskset", "-c", str(args.core), "roslaunch", "ekf_slam", "slam.launch",
+             "features:=false"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            preexec_fn=os.setsid))
+        rospy.init_node("realtime_replay", disable_signals=True)
+        probe = Probe()
+        time.sleep(5.0)
+        start = time.monotonic()
+        play = ["rosbag", "play", "--clock", "--quiet", "-r", str(args.rate), args.bag]
+        if args.seconds > 0:
+            play += ["-u", str(args.seconds)]
+        subprocess.check_call(play, env=env)
+        played = time.monotonic() - start
+        time.sleep(5.0)  # the last scans and diagnostics
+        gaps = [b - a for a, b in zip(probe.tf_wall, probe.tf_wall[1:])]
+        print("log: %s at %gx on core %d: %d scans in %.1f s of wall-clock"
+              % (os.path.basename(args.bag), args.rate, args.core, probe.scans, played))
+        print("per-scan latency (scan in -> pose out): p50 %.1f ms, p99 %.1f ms, max %.1f ms"
+              " over %d scans" % (1e3 * percentile(probe.latency, 50),
+                                  1e3 * percentile(probe.latency, 99),
+                                  1e3 * max(probe.latency or [float("nan")]), len(probe.latency)))
+        print("largest gap between map -> odom transforms: %.1f ms" % (1e3 * max(gaps or [0])))
+        print("back end: runs inside each scan's processing (its cost is in the latency above);"
+              " map thread: %d grids, last built in %.2f s" % (probe.maps, probe.map_build))
+        dropped = sum(probe.drops.values())
+        print("dropped by the node: %d %s; never answered: %d"
+              % (dropped, {k: v for k, v in probe.drops.items() if v}, len(probe.scan_wall)))
+    finally:
+        for p in reversed(procs):
+            try:
+                os.killpg(p.pid, signal.SIGINT)
+                p.wait(timeout=15)
+            except Exception:
+                os.killpg(p.pid, signal.SIGKILL)
+
+
+if __name__ == "__main__":
+    main()
