@@ -53,8 +53,15 @@ class OfficeLoop(unittest.TestCase):
         # to a third of odometry's: before the loop closes it can spike in
         # some noise draws (a CI run of seed 1 on the earlier world with a
         # turned cabinet: 0.278 m against 0.464 m).
+        # SLAM's mean error over the loop is held on its own (runs measured:
+        # 0.012-0.088 m), and against odometry's at half of it. Odometry's
+        # mean error depends on the noise draw and on the path driven
+        # (0.24-0.55 m over recent CI runs): at a third, one run failed whose
+        # odometry happened to stay close (0.240 m) while SLAM was as usual
+        # (0.084 m; the same test passed again at 0.012 against 0.461 m).
         self.assertGreater(r["odometry_max_position_error"], 0.2)
-        self.assertGreater(r["odometry_mean_position_error"], 3.0 * r["mean_position_error"])
+        self.assertLess(r["mean_position_error"], 0.12)
+        self.assertGreater(r["odometry_mean_position_error"], 2.0 * r["mean_position_error"])
         # One run's pose NEES is a weak test: its errors are correlated over
         # the whole loop (3-50 independent samples), so single runs scatter
         # from 0.6 to 15 over the seeds measured (README). The
