@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Scores one simulated loop of the office world (test/sim_office_loop.test)
-with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
+with tools/sim_monitor.py and asserts its acceptance figures:
   - final position error < 0.10 m and heading error < 2 deg, while odometry
     alone is at least 3x farther off over the loop (mean error; its largest
     > 0.2 m);
@@ -11,11 +11,11 @@ with tools/sim_monitor.py and asserts the acceptance figures of issue 6:
     tools/office_monte_carlo.sh, README "The pose NEES");
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
-and then (issue 7) replays the run's recording through offline.launch
+and then replays the run's recording through offline.launch
 (sim_replay_test.pause_and_replay): the offline outputs exist and the run is
 reproduced (same landmarks, final pose within 1 cm), and the smoothed
 trajectory (the full smoother) is at least as close to the truth as the
-filtered one (issue 7).
+filtered one.
 """
 import os
 import sys

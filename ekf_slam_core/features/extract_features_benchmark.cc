@@ -1,4 +1,4 @@
-// Extraction time per scan (issue targets: 361 beams <= 50 us, 181 beams
+// Extraction time per scan (targets: 361 beams <= 50 us, 181 beams
 // <= 25 us on one core). The scans are ray-cast from the carton layout of
 // thesis §5.1.2 inside a 9 m x 6 m lab, with 1 cm range noise: a cluttered,
 // feature-rich sweep (about 20 lines and 30 point features at 361 beams).
