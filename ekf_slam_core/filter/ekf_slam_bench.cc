@@ -53,42 +53,14 @@ std::vector<PointObservation> scan(const EkfSlam& filter, const Pose2& odom, std
   return observations;
 }
 
-void BM_FullIteration(benchmark::State& state) {
-  const int landmarks = static_cast<int>(state.range(0));
-  std::mt19937 rng(42);
-  EkfSlam filter = makeFilter(landmarks, rng);
-  AssociationOptions association;
-  const Pose2 odom0, odom1(0.02, 0.0, 0.005);
-
-  for (auto _ : state) {
-    state.PauseTiming();
-    const std::vector<PointObservation> observations = scan(filter, odom1, rng);
-    state.ResumeTiming();
-
-    const IterationReport report =
-        runIteration(filter, association, odom0, odom1, 0.1, observations);
-
-    state.PauseTiming();
-    benchmark::DoNotOptimize(report.matches.data());
-    if (!report.ok() || report.new_landmark_ids.size() != 1)
-      state.SkipWithError("iteration failed");
-    state.counters["matches"] = static_cast<double>(report.matches.size());
-    // Back to `landmarks` landmarks: dropping the newest one costs nothing.
-    filter.removeLandmark(report.new_landmark_ids.front());
-    state.ResumeTiming();
-  }
-  const int n = filter.stateDim();
-  state.counters["state_dim"] = n;
-  // Live covariance (n² doubles); the filter's storage may hold up to 2× the
-  // dimension in reserve (4× the bytes) between reallocations.
-  state.counters["covariance_MiB"] = n * static_cast<double>(n) * sizeof(double) / (1 << 20);
-}
-
-// The same iteration followed by the removal of a landmark from the middle of
-// the map, as pruning a tentative landmark or merging a twin does: every later
-// row and column of the covariance moves. Untimed, a landmark is then added
-// at the end so that the map keeps its size.
-void BM_IterationRemovingAMiddleLandmark(benchmark::State& state) {
+// One timed iteration per loop at a constant map size. With
+// `remove_middle`, the iteration is followed (timed) by the removal of a
+// landmark from the middle of the map, as pruning a tentative landmark or
+// merging a twin does: every later row and column of the covariance moves.
+// Untimed, the new landmark is dropped again (the newest: it costs nothing)
+// and, after a middle removal, landmarks are added at the end until the map
+// has its size again (without it, merges of twins may shrink the map).
+void timedIterations(benchmark::State& state, bool remove_middle) {
   const int landmarks = static_cast<int>(state.range(0));
   std::mt19937 rng(42);
   EkfSlam filter = makeFilter(landmarks, rng);
@@ -103,14 +75,15 @@ void BM_IterationRemovingAMiddleLandmark(benchmark::State& state) {
 
     const IterationReport report =
         runIteration(filter, association, odom0, odom1, 0.1, observations);
-    filter.removeLandmark(filter.landmarks()[filter.landmarkCount() / 2].id);
+    if (remove_middle) filter.removeLandmark(filter.landmarks()[filter.landmarkCount() / 2].id);
 
     state.PauseTiming();
     benchmark::DoNotOptimize(report.matches.data());
     if (!report.ok() || report.new_landmark_ids.size() != 1)
       state.SkipWithError("iteration failed");
+    state.counters["matches"] = static_cast<double>(report.matches.size());
     filter.removeLandmark(report.new_landmark_ids.front());
-    while (filter.landmarkCount() < landmarks) {
+    while (remove_middle && filter.landmarkCount() < landmarks) {
       PointObservation obs;
       obs.z = {range(rng), bearing(rng)};
       obs.covariance = Matrix2::Identity() * 1e-4;
@@ -118,8 +91,15 @@ void BM_IterationRemovingAMiddleLandmark(benchmark::State& state) {
     }
     state.ResumeTiming();
   }
-  state.counters["state_dim"] = filter.stateDim();
+  const int n = filter.stateDim();
+  state.counters["state_dim"] = n;
+  // Live covariance (n² doubles); the filter's storage may hold up to 2× the
+  // dimension in reserve (4× the bytes) between reallocations.
+  state.counters["covariance_MiB"] = n * static_cast<double>(n) * sizeof(double) / (1 << 20);
 }
+
+void BM_FullIteration(benchmark::State& state) { timedIterations(state, false); }
+void BM_IterationRemovingAMiddleLandmark(benchmark::State& state) { timedIterations(state, true); }
 
 BENCHMARK(BM_FullIteration)
     ->Arg(50)
