@@ -77,7 +77,7 @@ class OfficeLoop(unittest.TestCase):
                                                   wait_for_done=False)
         self.assertEqual(replay["offline_landmarks"], replay["live_landmarks"])
         self.assertLess(replay["distance"], 0.01)
-        # Issue 7: trajectory_smoothed.txt is the full smoother (batch MAP
+        # trajectory_smoothed.txt is the full smoother (batch MAP
         # over every pose, landmark and observation the filter used,
         # docs/maths.md 8b); it must not be worse than the filter. Measured
         # on recorded office loops: 0.0081 m vs 0.0309 m and 0.0388 m vs

@@ -182,7 +182,7 @@ class SimReplay(unittest.TestCase):
         self.assertEqual(r["offline_landmarks"], r["live_landmarks"])
         self.assertLess(r["distance"], 0.01)
         self.assertLess(r["heading"], math.radians(0.5))
-        # Issue 7: the full smoother (batch MAP over everything the filter
+        # The full smoother (batch MAP over everything the filter
         # used) is not worse than the filter against the truth. Measured on
         # recorded carton replays: 2.2 / 2.4 / 1.7 mm against 2.4 / 2.9 /
         # 1.5 mm (SMOOTHED_TOLERANCE above).
