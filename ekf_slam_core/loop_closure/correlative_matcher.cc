@@ -8,14 +8,14 @@ namespace ekf_slam {
 std::string CorrelativeMatcherOptions::validate() const {
   if (!(resolution > 0.0)) return "resolution must be > 0 (m)";
   if (!(sigma > 0.0)) return "sigma must be > 0 (m)";
-  if (coarse_factor < 1) return "coarse_factor must be >= 1";
+  if (levels < 1 || levels > 16) return "levels must be in [1, 16]";
   if (!(angular_step > 0.0)) return "angular_step must be > 0 (rad)";
   return "";
 }
 
 LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
                                const CorrelativeMatcherOptions& options)
-    : resolution_(options.resolution), factor_(options.coarse_factor) {
+    : resolution_(options.resolution), pad_(1, 0) {
   if (points.empty()) return;
   // The likelihood is cut at 3 sigma, beyond which it is below 1 %.
   const double reach = 3.0 * options.sigma;
@@ -27,7 +27,9 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
   origin_ = low - Vector2::Constant(reach + resolution_);
   width_ = static_cast<int>(std::ceil((high.x() - origin_.x() + reach) / resolution_)) + 2;
   height_ = static_cast<int>(std::ceil((high.y() - origin_.y() + reach) / resolution_)) + 2;
-  fine_.assign(static_cast<size_t>(width_) * height_, 0.0f);
+  const size_t cells_total = static_cast<size_t>(width_) * height_;
+  levels_.assign(1, std::vector<float>(cells_total, 0.0f));
+  std::vector<float>& fine = levels_[0];
   const int cells = static_cast<int>(std::ceil(reach / resolution_));
   const double inv_two_sigma2 = 1.0 / (2.0 * options.sigma * options.sigma);
   for (const Vector2& p : points) {
@@ -39,30 +41,37 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
         const Vector2 centre = origin_ + resolution_ * Vector2(ix + 0.5, iy + 0.5);
         const float value =
             static_cast<float>(std::exp(-(centre - p).squaredNorm() * inv_two_sigma2));
-        float& cell = fine_[index(ix, iy)];
+        float& cell = fine[index(ix, iy)];
         cell = std::max(cell, value);
       }
     }
   }
-  // Coarse bound: running maximum over [ix, ix + f) along x, then along y.
-  std::vector<float> along_x(fine_.size(), 0.0f);
-  for (int iy = 0; iy < height_; ++iy) {
-    for (int ix = 0; ix < width_; ++ix) {
-      float m = 0.0f;
-      for (int k = 0; k < factor_ && ix + k < width_; ++k)
-        m = std::max(m, fine_[index(ix + k, iy)]);
-      along_x[index(ix, iy)] = m;
-    }
-  }
-  coarse_.assign(fine_.size(), 0.0f);
-  for (int iy = 0; iy < height_; ++iy) {
-    for (int ix = 0; ix < width_; ++ix) {
-      float m = 0.0f;
-      for (int k = 0; k < factor_ && iy + k < height_; ++k) {
-        m = std::max(m, along_x[index(ix, iy + k)]);
+  // Level k from level k-1: the maximum over [i, i + 2^k) is the larger of
+  // the maxima over [i, i + h) and [i + h, i + 2h), h = 2^(k-1); first
+  // along x, then along y. A block that starts outside the grid may still
+  // reach into it, so level k extends 2^k - 1 cells beyond the grid's lower
+  // edges (pad_[k]); cells beyond it are 0 at every level.
+  for (int k = 1; k < options.levels; ++k) {
+    const int h = 1 << (k - 1);
+    const int pad = pad_.back() + h;
+    const int w = width_ + pad, ht = height_ + pad;
+    std::vector<float> along_x(static_cast<size_t>(w) * ht, 0.0f);
+    for (int y = 0; y < ht; ++y) {
+      for (int x = 0; x < w; ++x) {
+        along_x[static_cast<size_t>(y) * w + x] =
+            std::max(value(k - 1, x - pad, y - pad), value(k - 1, x - pad + h, y - pad));
       }
-      coarse_[index(ix, iy)] = m;
     }
+    std::vector<float> level(along_x.size(), 0.0f);
+    for (int y = 0; y < ht; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float a = along_x[static_cast<size_t>(y) * w + x];
+        level[static_cast<size_t>(y) * w + x] =
+            y + h < ht ? std::max(a, along_x[static_cast<size_t>(y + h) * w + x]) : a;
+      }
+    }
+    levels_.push_back(std::move(level));
+    pad_.push_back(pad);
   }
 }
 
@@ -73,70 +82,126 @@ void LikelihoodGrid::cellOf(const Vector2& p, int* ix, int* iy) const {
 
 namespace {
 
-struct Block {
-  double bound;  // coarse score: no translation in the block scores higher
+struct Candidate {
+  double score;  // at its level: a bound on every translation of the block
   int rotation;  // index into the rotations
-  int i0, j0;    // first translation offset of the block (cells)
+  int i, j;      // first translation offset of the block (cells)
+};
+
+class Search {
+ public:
+  Search(const LikelihoodGrid& grid, const std::vector<std::vector<std::pair<int, int>>>& cells,
+         int i_max, int j_max, double inv_count)
+      : grid_(grid), cells_(cells), i_max_(i_max), j_max_(j_max), inv_count_(inv_count) {}
+
+  double score(int level, const Candidate& c) const {
+    double sum = 0.0;
+    for (const auto& [ix, iy] : cells_[c.rotation]) sum += grid_.value(level, ix + c.i, iy + c.j);
+    return sum * inv_count_;
+  }
+
+  // Depth first into a block of `level` whose bound beats the best so far.
+  void descend(int level, const Candidate& block, Candidate* best) const {
+    if (level == 0) {
+      if (block.score > best->score) *best = block;
+      return;
+    }
+    const int h = 1 << (level - 1);
+    Candidate children[4];
+    int n = 0;
+    for (int di = 0; di < 2; ++di) {
+      for (int dj = 0; dj < 2; ++dj) {
+        Candidate c{0.0, block.rotation, block.i + di * h, block.j + dj * h};
+        if (c.i > i_max_ || c.j > j_max_) continue;
+        c.score = score(level - 1, c);
+        children[n++] = c;
+      }
+    }
+    // Best first (insertion sort of at most four).
+    for (int a = 1; a < n; ++a) {
+      for (int b = a; b > 0 && children[b].score > children[b - 1].score; --b) {
+        std::swap(children[b], children[b - 1]);
+      }
+    }
+    for (int k = 0; k < n; ++k) {
+      if (children[k].score <= best->score) break;
+      descend(level - 1, children[k], best);
+    }
+  }
+
+ private:
+  const LikelihoodGrid& grid_;
+  const std::vector<std::vector<std::pair<int, int>>>& cells_;
+  int i_max_, j_max_;
+  double inv_count_;
 };
 
 }  // namespace
 
 CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const LikelihoodGrid& grid,
                                     const Pose2& guess, double linear_window, double angular_window,
-                                    const CorrelativeMatcherOptions& options) {
-  CorrelativeResult best;
-  best.pose = guess;
-  if (points.empty()) return best;
+                                    const CorrelativeMatcherOptions& options, double min_score) {
+  CorrelativeResult result;
+  result.pose = guess;
+  if (points.empty() || grid.empty()) return result;
   const double res = grid.resolution();
-  const int f = grid.coarseFactor();
   const int n = static_cast<int>(std::ceil(linear_window / res));
-  const int m = static_cast<int>(std::ceil(angular_window / options.angular_step));
+  // Rotations: ±m steps, no more than one full turn.
+  const int full_turn = static_cast<int>(std::floor(2.0 * kPi / options.angular_step));
+  const int m =
+      std::min(static_cast<int>(std::ceil(angular_window / options.angular_step)), full_turn / 2);
   const int rotations = 2 * m + 1;
   const int count = static_cast<int>(points.size());
-  const double inv_count = 1.0 / count;
+
+  // Translations that keep some point on the grid: the points' origin no
+  // farther outside the grid than the farthest point reaches.
+  double reach = 0.0;
+  for (const Vector2& p : points) reach = std::max(reach, p.norm());
+  const Vector2 low = grid.lowerCorner() - Vector2::Constant(reach + res);
+  const Vector2 high = grid.upperCorner() + Vector2::Constant(reach + res);
+  const int i_min = std::max(-n, static_cast<int>(std::floor((low.x() - guess.x) / res)));
+  const int i_max = std::min(n, static_cast<int>(std::ceil((high.x() - guess.x) / res)));
+  const int j_min = std::max(-n, static_cast<int>(std::floor((low.y() - guess.y) / res)));
+  const int j_max = std::min(n, static_cast<int>(std::ceil((high.y() - guess.y) / res)));
+  if (i_min > i_max || j_min > j_max) return result;
 
   // Cells of the points at every rotation, before any translation offset.
   std::vector<std::vector<std::pair<int, int>>> cells(rotations);
-  std::vector<Block> blocks;
   for (int r = 0; r < rotations; ++r) {
-    const double theta = guess.theta + (r - m) * options.angular_step;
-    const Pose2 rotated(guess.x, guess.y, theta);
+    const Pose2 rotated(guess.x, guess.y, guess.theta + (r - m) * options.angular_step);
     cells[r].reserve(count);
     for (const Vector2& p : points) {
       int ix, iy;
       grid.cellOf(transformFrom(rotated, p), &ix, &iy);
       cells[r].emplace_back(ix, iy);
     }
-    for (int i0 = -n; i0 <= n; i0 += f) {
-      for (int j0 = -n; j0 <= n; j0 += f) {
-        double sum = 0.0;
-        for (const auto& [ix, iy] : cells[r]) sum += grid.coarse(ix + i0, iy + j0);
-        blocks.push_back({sum * inv_count, r, i0, j0});
+  }
+  const Search search(grid, cells, i_max, j_max, 1.0 / count);
+  const int top = grid.levels() - 1;
+  const int step = 1 << top;
+  std::vector<Candidate> blocks;
+  for (int r = 0; r < rotations; ++r) {
+    for (int i = i_min; i <= i_max; i += step) {
+      for (int j = j_min; j <= j_max; j += step) {
+        Candidate c{0.0, r, i, j};
+        c.score = search.score(top, c);
+        if (c.score > min_score) blocks.push_back(c);
       }
     }
   }
   std::sort(blocks.begin(), blocks.end(),
-            [](const Block& a, const Block& b) { return a.bound > b.bound; });
+            [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  Candidate best{min_score, -1, 0, 0};
 
-  int best_r = m, best_i = 0, best_j = 0;
-  for (const Block& block : blocks) {
-    if (block.bound <= best.score) break;  // nothing left can do better
-    for (int i = block.i0; i < block.i0 + f && i <= n; ++i) {
-      for (int j = block.j0; j < block.j0 + f && j <= n; ++j) {
-        double sum = 0.0;
-        for (const auto& [ix, iy] : cells[block.rotation]) sum += grid.fine(ix + i, iy + j);
-        if (sum * inv_count > best.score) {
-          best.score = sum * inv_count;
-          best_r = block.rotation;
-          best_i = i;
-          best_j = j;
-        }
-      }
-    }
+  for (const Candidate& block : blocks) {
+    if (block.score <= best.score) break;  // nothing left can do better
+    search.descend(top, block, &best);
   }
-  best.pose = Pose2(guess.x + best_i * res, guess.y + best_j * res,
-                    guess.theta + (best_r - m) * options.angular_step);
-  return best;
+  if (best.rotation < 0) return result;  // nothing above min_score
+  result.score = best.score;
+  result.pose = Pose2(guess.x + best.i * res, guess.y + best.j * res,
+                      wrapAngle(guess.theta + (best.rotation - m) * options.angular_step));
+  return result;
 }
 
 }  // namespace ekf_slam

@@ -1,18 +1,23 @@
-// Exhaustive correlative scan matching (Olson 2009) with a two-level
-// branch-and-bound, for loop closure: it finds the pose of a scan against a
-// reference point set anywhere inside a search window of metres and tens of
-// degrees, where ICP (a local method with a basin of a few decimetres)
-// cannot start.
+// Exhaustive correlative scan matching (Olson 2009) with a multi-level
+// branch and bound (as in Hess et al. 2016), for loop closure: it finds the
+// pose of a scan against a reference point set anywhere inside a search
+// window of tens of metres and any heading, where ICP (a local method with a
+// basin of a few decimetres) cannot start.
 //
 // The reference is rasterised into a likelihood grid: cell value
 // L(c) = exp(−d² / 2σ²), d the distance from the cell centre to the nearest
 // reference point. The score of a candidate pose T is the mean of L over the
-// scan points placed by T, in [0, 1]. A coarse grid holds, at each cell, the
-// maximum of L over the f × f fine cells whose lower-left corner it is, so
-// the coarse score of a block of f × f translations bounds the fine score of
-// every translation in the block. Blocks are refined best bound first, and
-// the search stops when no remaining bound beats the best fine score: the
-// result is the exhaustive search's optimum over the window's lattice.
+// scan points placed by T, in [0, 1]. Level k of the grid holds, at each
+// cell, the maximum of L over the 2^k × 2^k fine cells whose lower-left
+// corner it is (cells outside the grid count as 0; the level extends below
+// the grid so that a block starting outside it still bounds the cells it
+// reaches inside), so the level-k score of a block of 2^k × 2^k translations
+// bounds the fine score of every translation in the block. The search
+// starts from blocks of the top level and descends depth first, best bound
+// first, into the four sub-blocks of a block whose bound beats the best
+// fine score found so far (or the caller's minimum score): the result is
+// the exhaustive search's optimum over the window's lattice, at a cost that
+// grows with the number of plausible poses rather than with the window.
 #pragma once
 
 #include <string>
@@ -25,35 +30,44 @@ namespace ekf_slam {
 struct CorrelativeMatcherOptions {
   double resolution = 0.05;      // m: fine grid cell and translation step
   double sigma = 0.07;           // m: width of the likelihood around a reference point
-  int coarse_factor = 8;         // fine cells per coarse block side
+  int levels = 7;                // grid levels (1: exhaustive; top blocks are 2^(levels-1) cells)
   double angular_step = 0.0087;  // rad (0.5 deg): rotation step of the search
 
   std::string validate() const;  // empty when valid, else names the bad field
 };
 
-// The likelihood field of a reference point set, with its coarse bound.
+// The likelihood field of a reference point set, with its bounding levels.
 class LikelihoodGrid {
  public:
   LikelihoodGrid(const std::vector<Vector2>& points, const CorrelativeMatcherOptions& options);
 
   // Fine cell of a point (may lie outside the grid).
   void cellOf(const Vector2& p, int* ix, int* iy) const;
-  float fine(int ix, int iy) const { return inside(ix, iy) ? fine_[index(ix, iy)] : 0.0f; }
-  float coarse(int ix, int iy) const { return inside(ix, iy) ? coarse_[index(ix, iy)] : 0.0f; }
+  // Level 0 is the likelihood itself; level k bounds it over 2^k × 2^k cells.
+  float value(int level, int ix, int iy) const {
+    const int pad = pad_[level];
+    const int x = ix + pad, y = iy + pad, w = width_ + pad;
+    if (x < 0 || y < 0 || x >= w || y >= height_ + pad) return 0.0f;
+    return levels_[level][static_cast<size_t>(y) * w + x];
+  }
+  float fine(int ix, int iy) const { return value(0, ix, iy); }
+  int levels() const { return static_cast<int>(levels_.size()); }
   double resolution() const { return resolution_; }
-  int coarseFactor() const { return factor_; }
+  bool empty() const { return width_ == 0; }
+  // Corners of the grid (m, in the points' frame).
+  Vector2 lowerCorner() const { return origin_; }
+  Vector2 upperCorner() const { return origin_ + resolution_ * Vector2(width_, height_); }
 
  private:
   bool inside(int ix, int iy) const { return ix >= 0 && iy >= 0 && ix < width_ && iy < height_; }
   size_t index(int ix, int iy) const { return static_cast<size_t>(iy) * width_ + ix; }
 
   double resolution_;
-  int factor_;
   Vector2 origin_ = Vector2::Zero();  // corner of cell (0, 0)
   int width_ = 0;
   int height_ = 0;
-  std::vector<float> fine_;
-  std::vector<float> coarse_;
+  std::vector<std::vector<float>> levels_;  // level k: (width + pad_[k]) × (height + pad_[k])
+  std::vector<int> pad_;                    // cells level k extends below the grid's lower edges
 };
 
 struct CorrelativeResult {
@@ -62,9 +76,15 @@ struct CorrelativeResult {
 };
 
 // Searches x, y within ±linear_window of the guess and θ within
-// ±angular_window, on the grid's lattice.
+// ±angular_window (at most a full turn), on the grid's lattice.
+// Translations that would leave every point outside the grid cannot score
+// and are not searched, so a window far larger than the grid costs little.
+// With min_score > 0 only poses scoring above it are looked for: the
+// result is the best of those, or score 0 at the guess when there is none
+// (much faster when most of the window cannot reach min_score).
 CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const LikelihoodGrid& grid,
                                     const Pose2& guess, double linear_window, double angular_window,
-                                    const CorrelativeMatcherOptions& options);
+                                    const CorrelativeMatcherOptions& options,
+                                    double min_score = 0.0);
 
 }  // namespace ekf_slam

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <queue>
+#include <unordered_set>
 
 namespace ekf_slam {
 
@@ -21,17 +22,17 @@ std::string LoopClosureOptions::validate() const {
     return "the *_per_sqrt_* noise terms must be >= 0";
   }
   if (!(min_loop_travel >= 0.0)) return "min_loop_travel must be >= 0 (m)";
+  if (!(search_sigmas > 0.0)) return "search_sigmas must be > 0";
   if (!(search_radius_min > 0.0)) return "search_radius_min must be > 0 (m)";
   if (!(search_radius_max >= search_radius_min)) {
     return "search_radius_max must be >= search_radius_min (m)";
   }
-  if (!(search_radius_per_metre >= 0.0)) return "search_radius_per_metre must be >= 0";
   if (!(search_angle_min > 0.0)) return "search_angle_min must be > 0 (rad)";
-  if (!(search_angle_max >= search_angle_min)) {
-    return "search_angle_max must be >= search_angle_min (rad)";
-  }
-  if (!(search_angle_per_metre >= 0.0)) return "search_angle_per_metre must be >= 0";
   if (!(max_heading_difference > 0.0)) return "max_heading_difference must be > 0 (rad)";
+  if (max_candidates < 1) return "max_candidates must be >= 1";
+  if (query_keys < 0) return "query_keys must be >= 0";
+  if (!(confirm_radius > 0.0)) return "confirm_radius must be > 0 (m)";
+  if (confirm_keys < 1) return "confirm_keys must be >= 1";
   if (submap_half_width < 0) return "submap_half_width must be >= 0";
   if (retry_interval < 0) return "retry_interval must be >= 0";
   std::string error = correlative.validate();
@@ -67,6 +68,20 @@ std::vector<Vector2> thinned(const std::vector<Vector2>& points, double spacing)
   std::vector<Vector2> out;
   for (const Vector2& p : points) {
     if (out.empty() || (p - out.back()).norm() >= spacing) out.push_back(p);
+  }
+  return out;
+}
+
+// Keeps the first point in each cell of a `spacing` grid: merged scans of
+// one place do not pile up.
+std::vector<Vector2> gridThinned(const std::vector<Vector2>& points, double spacing) {
+  if (!(spacing > 0.0)) return points;
+  std::vector<Vector2> out;
+  std::unordered_set<long long> seen;
+  for (const Vector2& p : points) {
+    const long long ix = static_cast<long long>(std::floor(p.x() / spacing));
+    const long long iy = static_cast<long long>(std::floor(p.y() / spacing));
+    if (seen.insert((ix << 32) ^ (iy & 0xffffffffLL)).second) out.push_back(p);
   }
   return out;
 }
@@ -164,17 +179,65 @@ void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& fro
   adjacency_[index].emplace_back(previous, distance);
 
   if (!options_.enabled) return;
+  if (hypothesis_) {
+    if (tryConfirm(index) || hypothesis_) return;  // confirmed, or still waiting
+  }
   const std::vector<double> distances = graphDistances(index);
-  const int candidate = pickCandidate(index, distances);
-  if (candidate < 0) return;
+  const std::vector<int> candidates = pickCandidates(index, distances);
+  for (const int candidate : candidates) {
+    ++counters_.candidates;
+    const double radius = searchRadius(distances[candidate]);
+    const Pose2 guess = between(graph_.pose(candidate), graph_.pose(index));
+    Pose2 relative;
+    if (!verify(candidate, index, guess, radius, searchAngle(distances[candidate]), &relative)) {
+      ++counters_.refused;
+      continue;
+    }
+    if (radius > options_.confirm_radius) {
+      hypothesis_ = Hypothesis{candidate, index, relative};
+      return;
+    }
+    if (addLoopEdge(candidate, index, relative)) return;
+    break;  // inconsistent with the graph: the others are no likelier
+  }
+  if (!candidates.empty()) next_attempt_ = index + options_.retry_interval;
+}
+
+bool LoopCloser::tryConfirm(int key) {
+  const Hypothesis h = *hypothesis_;
+  if (key - h.to > options_.confirm_keys) {
+    hypothesis_.reset();
+    ++counters_.unconfirmed;
+    return false;
+  }
+  // Where the hypothesis puts this key scan, in the map frame: the front
+  // end's short chain since the hypothesis, hung off the old key scan.
+  const Pose2 predicted = compose(
+      graph_.pose(h.from), compose(h.relative, between(graph_.pose(h.to), graph_.pose(key))));
+  const std::vector<double> distance = graphDistances(key);
+  int nearest = -1;
+  double best = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < key; ++j) {
+    if (distance[j] < options_.min_loop_travel) continue;
+    const double d = std::hypot(graph_.pose(j).x - predicted.x, graph_.pose(j).y - predicted.y);
+    if (d < best) {
+      best = d;
+      nearest = j;
+    }
+  }
+  if (nearest < 0) return false;
   ++counters_.candidates;
   Pose2 relative;
-  if (!verify(candidate, index, distances[candidate], &relative)) {
+  if (!verify(nearest, key, between(graph_.pose(nearest), predicted), options_.search_radius_min,
+              options_.search_angle_min, &relative)) {
     ++counters_.refused;
-    next_attempt_ = index + options_.retry_interval;
-    return;
+    return false;
   }
-  if (!addLoopEdge(candidate, index, relative)) next_attempt_ = index + options_.retry_interval;
+  hypothesis_.reset();
+  if (addLoopEdge(h.from, h.to, h.relative)) {
+    addLoopEdge(nearest, key, relative);
+  }
+  return true;
 }
 
 bool LoopCloser::addLoop(int from, int to, const Pose2& relative) {
@@ -238,36 +301,61 @@ std::vector<double> LoopCloser::graphDistances(int from) const {
   return distance;
 }
 
+// Relative pose over a chain of d metres of sequential edges: the heading
+// variance grows as σ_r² d, and a heading error that grew linearly along the
+// way displaces the far end by its integral, variance σ_r² d³ / 3, on top of
+// the translation random walk σ_t² d.
 double LoopCloser::searchRadius(double graph_distance) const {
-  return std::min(options_.search_radius_max,
-                  options_.search_radius_min + options_.search_radius_per_metre * graph_distance);
+  const double d = graph_distance;
+  const double var_r = std::pow(options_.rotation_sigma_per_sqrt_metre, 2);
+  const double var_t = std::pow(options_.translation_sigma_per_sqrt_metre, 2);
+  const double sigma = std::sqrt(var_t * d + var_r * d * d * d / 3.0);
+  return std::clamp(options_.search_sigmas * sigma, options_.search_radius_min,
+                    options_.search_radius_max);
 }
 
 double LoopCloser::searchAngle(double graph_distance) const {
-  return std::min(options_.search_angle_max,
-                  options_.search_angle_min + options_.search_angle_per_metre * graph_distance);
+  const double sigma = options_.rotation_sigma_per_sqrt_metre * std::sqrt(graph_distance);
+  return std::clamp(options_.search_sigmas * sigma, options_.search_angle_min, kPi);
 }
 
-int LoopCloser::pickCandidate(int key, const std::vector<double>& distance) const {
-  if (key < next_attempt_) return -1;
+std::vector<int> LoopCloser::pickCandidates(int key, const std::vector<double>& distance) const {
+  if (key < next_attempt_) return {};
   const Pose2& here = graph_.pose(key);
-  int best = -1;
-  double best_ratio = 1.0;
+  // Ratio of the distance to the window: a near, well-known place first.
+  std::vector<std::pair<double, int>> ranked;
   for (int j = 0; j < key; ++j) {
     if (distance[j] < options_.min_loop_travel) continue;
     const Pose2& there = graph_.pose(j);
     if (std::abs(wrapAngle(there.theta - here.theta)) > options_.max_heading_difference) continue;
-    // Closest relative to the window: a near, well-known place first.
     const double ratio = std::hypot(there.x - here.x, there.y - here.y) / searchRadius(distance[j]);
-    if (ratio <= best_ratio) {
-      best_ratio = ratio;
-      best = j;
-    }
+    if (ratio <= 1.0) ranked.emplace_back(ratio, j);
   }
-  return best;
+  std::sort(ranked.begin(), ranked.end());
+  // One per submap: a candidate whose submap overlaps a chosen one's adds nothing.
+  std::vector<int> chosen;
+  for (const auto& [ratio, j] : ranked) {
+    if (static_cast<int>(chosen.size()) >= options_.max_candidates) break;
+    bool overlaps = false;
+    for (const int c : chosen) overlaps |= std::abs(c - j) <= 2 * options_.submap_half_width;
+    if (!overlaps) chosen.push_back(j);
+  }
+  return chosen;
 }
 
-bool LoopCloser::verify(int candidate, int key, double distance, Pose2* relative) {
+std::vector<Vector2> LoopCloser::queryPoints(int key, bool sparse) const {
+  if (options_.query_keys == 0) return sparse ? keys_[key].sparse : keys_[key].points;
+  const Pose2& origin = graph_.pose(key);
+  std::vector<Vector2> merged;
+  for (int m = key; m >= std::max(0, key - options_.query_keys); --m) {
+    const Pose2 placement = between(origin, graph_.pose(m));
+    for (const Vector2& p : keys_[m].points) merged.push_back(transformFrom(placement, p));
+  }
+  return gridThinned(merged, sparse ? options_.search_point_spacing : icp_.min_point_spacing);
+}
+
+bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radius, double angle,
+                        Pose2* relative) {
   const auto start = std::chrono::steady_clock::now();
   struct Timer {
     double* total;
@@ -286,19 +374,17 @@ bool LoopCloser::verify(int candidate, int key, double distance, Pose2* relative
     const Pose2 placement = between(origin, graph_.pose(m));
     for (const Vector2& p : keys_[m].points) submap.push_back(transformFrom(placement, p));
   }
-  const KeyScan& query = keys_[key];
-  if (static_cast<int>(query.points.size()) < icp_.min_correspondences) return false;
+  const std::vector<Vector2> query = queryPoints(key, false);
+  if (static_cast<int>(query.size()) < icp_.min_correspondences) return false;
 
-  const Pose2 guess = between(origin, graph_.pose(key));
   const LikelihoodGrid grid(submap, options_.correlative);
-  const CorrelativeResult coarse =
-      correlativeSearch(query.sparse, grid, guess, searchRadius(distance), searchAngle(distance),
-                        options_.correlative);
+  const CorrelativeResult coarse = correlativeSearch(
+      queryPoints(key, true), grid, guess, radius, angle, options_.correlative, options_.min_score);
   if (coarse.score < options_.min_score) return false;
 
   const PointCloudReference reference(submap, icp_.normal_radius,
                                       icp_.initial_correspondence_distance);
-  const MatchResult fine = matchPoints(query.points, reference, coarse.pose, icp_);
+  const MatchResult fine = matchPoints(query, reference, coarse.pose, icp_);
   if (!fine.ok || fine.inlier_fraction < options_.min_inlier_fraction ||
       fine.rms_residual > options_.max_rms_residual) {
     return false;
@@ -306,7 +392,7 @@ bool LoopCloser::verify(int candidate, int key, double distance, Pose2* relative
   const Pose2 shift = between(coarse.pose, fine.pose);
   if (std::hypot(shift.x, shift.y) > options_.max_icp_shift) return false;
   // Along a featureless corridor the match slides: refuse it.
-  const Matrix3 covariance = icpCovariance(query.points, reference, fine.pose, icp_);
+  const Matrix3 covariance = icpCovariance(query, reference, fine.pose, icp_);
   const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
   if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) return false;
   *relative = fine.pose;
@@ -322,6 +408,10 @@ PoseGraphSummary LoopCloser::optimise() {
 }
 
 void LoopCloser::finish() {
+  if (hypothesis_) {
+    hypothesis_.reset();
+    ++counters_.unconfirmed;
+  }
   if (counters_.accepted == 0) return;
   optimise();
   // Loops the kernel no longer believes are dropped, and the rest re-solved

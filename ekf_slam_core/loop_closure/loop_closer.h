@@ -9,13 +9,16 @@
 //   variance linear in the distance and the turn, with a per-step floor).
 // - Loop candidates: old key scans whose graph distance to the new one (the
 //   shortest path through the graph, counting the travel along sequential
-//   edges and nothing across loop edges) is at least min_loop_travel, whose
-//   position lies within a search radius that grows with that distance
-//   (the relative pose's uncertainty grows with the chain that links them),
-//   and whose heading is within max_heading_difference (the LMS200 sees
-//   180°, scans facing away from each other share little).
-// - Verification: the new key scan is searched exhaustively (correlative,
-//   branch and bound) over the whole window against a submap of the
+//   edges and nothing across loop edges) is at least min_loop_travel and
+//   whose position lies within a search window of a few standard
+//   deviations of the chain that links them. The window grows without a
+//   practical bound with the distance (d^1.5): after a long loop it covers
+//   the whole map, so a loop is found however far the front end drifted.
+// - Verification: the recent key scans, merged in the new key scan's frame
+//   (a few metres of travel: the LMS200 sees 180°, a place revisited in the
+//   other direction shares little with one scan), are searched
+//   exhaustively (correlative, multi-level branch and bound) over the
+//   whole window and any heading it allows against a submap of the
 //   candidate and its neighbours, then refined by point-to-line ICP. A loop
 //   is accepted only when the correlative score, the ICP inlier fraction and
 //   the residual are strong and the match constrains every direction (no
@@ -29,6 +32,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,17 +57,32 @@ struct LoopClosureOptions {
   double step_sigma_rotation = 0.003;              // rad per key step (floor)
   double rotation_sigma_per_sqrt_metre = 0.01;     // rad per √m driven
   double rotation_sigma_per_sqrt_radian = 0.02;    // rad per √rad turned
-  // Candidates:
-  double min_loop_travel = 8.0;           // m of graph distance before a key scan may close a loop
-  double search_radius_min = 0.5;         // m: search window at zero graph distance …
-  double search_radius_per_metre = 0.05;  // … growing by this much per m of graph distance …
-  double search_radius_max = 10.0;        // … up to this
-  double search_angle_min = 0.1;          // rad, likewise for the heading window
-  double search_angle_per_metre = 0.005;  // rad per m
-  double search_angle_max = 0.35;         // rad
-  double max_heading_difference = 1.57;   // rad between the two key scans
-  int submap_half_width = 5;              // key scans each side of the candidate in its submap
-  int retry_interval = 3;                 // key scans to wait after a refused candidate
+  // Candidates: old key scans at least min_loop_travel of graph distance
+  // away whose estimated position lies inside the search window. The window
+  // is search_sigmas standard deviations of the relative pose predicted by
+  // the chain that links the two (the sequential-edge random walk above:
+  // the heading error integrates into a position error growing as d^1.5),
+  // so it grows without bound with the graph distance d and a loop is found
+  // however far the front end drifted; search_radius_max only bounds the
+  // cost. The heading window likewise (at most a full turn).
+  double min_loop_travel = 8.0;         // m of graph distance before a key scan may close a loop
+  double search_sigmas = 3.0;           // window half-width in standard deviations
+  double search_radius_min = 0.5;       // m: window floor
+  double search_radius_max = 1000.0;    // m: window ceiling
+  double search_angle_min = 0.1;        // rad, heading window floor
+  double max_heading_difference = kPi;  // rad between the two key scans' estimated headings
+  int max_candidates = 1;               // places verified per key scan, most likely first
+  int submap_half_width = 5;            // key scans each side of the candidate in its submap
+  int query_keys = 0;      // recent key scans merged into the query (0: the key scan alone)
+  int retry_interval = 3;  // key scans to wait after a refused candidate
+  // Confirmation. A loop found in a window wider than confirm_radius (the
+  // graph cannot yet tell a true match from a look-alike place) is held as
+  // a hypothesis. Each following key scan is then matched, in the smallest
+  // window, where the hypothesis puts it against the old key scans; the
+  // first such match confirms it and both loops enter the graph. No match
+  // within confirm_keys key scans: the hypothesis is discarded.
+  double confirm_radius = 1.0;  // m (a huge value: every loop enters at once)
+  int confirm_keys = 10;        // key scans
   // Verification:
   CorrelativeMatcherOptions correlative;
   double search_point_spacing = 0.15;  // m: key-scan points thinned for the correlative search
@@ -98,6 +117,7 @@ struct LoopClosureCounters {
   long refused = 0;       // failed verification
   long dropped = 0;       // loop edges the kernel rejected at the end
   long inconsistent = 0;  // loops refused by the consistency test (not in `accepted`)
+  long unconfirmed = 0;   // wide-window hypotheses no later key scan confirmed
   long optimisations = 0;
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;
@@ -161,10 +181,19 @@ class LoopCloser {
   // False when the consistency test refused it (the graph is then as before).
   bool addLoopEdge(int from, int to, const Pose2& relative);
   std::vector<double> graphDistances(int from) const;
-  int pickCandidate(int key, const std::vector<double>& distance) const;
-  bool verify(int candidate, int key, double distance, Pose2* relative);
+  // Up to max_candidates key scans to verify, most likely first.
+  std::vector<int> pickCandidates(int key, const std::vector<double>& distance) const;
+  // Matches key scan `key` (with the recent ones) against the submap of
+  // `candidate`, searching ±radius, ±angle around `guess` (key in candidate's frame).
+  bool verify(int candidate, int key, const Pose2& guess, double radius, double angle,
+              Pose2* relative);
+  // A pending hypothesis: true when key scan `key` confirmed it (both loops entered).
+  bool tryConfirm(int key);
+  // Window half-widths for a relative pose over `graph_distance` of chain.
   double searchRadius(double graph_distance) const;  // m
   double searchAngle(double graph_distance) const;   // rad
+  // Merged points of the recent key scans in the frame of key scan `key`.
+  std::vector<Vector2> queryPoints(int key, bool sparse) const;
   PoseGraphSummary optimise();
 
   LoopClosureOptions options_;
@@ -175,6 +204,11 @@ class LoopCloser {
   std::vector<std::vector<std::pair<int, double>>> adjacency_;  // graph distance edges
   LoopClosureCounters counters_;
   int next_attempt_ = 0;  // key index before which no loop is tried (after a refusal)
+  struct Hypothesis {
+    int from, to;
+    Pose2 relative;
+  };
+  std::optional<Hypothesis> hypothesis_;  // a wide-window loop awaiting confirmation
 };
 
 }  // namespace ekf_slam

@@ -67,8 +67,52 @@ TEST(CorrelativeSearch, FindsAPoseMetresAndDegreesFromTheGuess) {
   EXPECT_LT(std::abs(wrapAngle(result.pose.theta - query_pose.theta)), degToRad(1.0));
 }
 
+// A window of ±60 m and any heading around a guess 25 m and 150 deg off:
+// the multi-level bound prunes the empty space, and the pose is found.
+TEST(CorrelativeSearch, FindsThePoseAnywhereInAHugeWindowAtAnyHeading) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(7);
+  const Pose2 pose(3.0, -2.0, 2.0);
+  std::vector<Vector2> reference;
+  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
+    reference.push_back(transformFrom(pose, p));
+  }
+  const Pose2 query_pose = compose(pose, Pose2(0.4, 0.2, 0.3));
+  const CorrelativeMatcherOptions options;
+  const LikelihoodGrid grid(reference, options);
+  const Pose2 guess = compose(query_pose, Pose2(-20.0, 15.0, degToRad(150.0)));
+  const CorrelativeResult result = correlativeSearch(pointsOf(sweep(world, query_pose, &rng)), grid,
+                                                     guess, 60.0, kPi, options, 0.5);
+  EXPECT_GT(result.score, 0.7);
+  EXPECT_LT(std::hypot(result.pose.x - query_pose.x, result.pose.y - query_pose.y), 0.08);
+  EXPECT_LT(std::abs(wrapAngle(result.pose.theta - query_pose.theta)), degToRad(1.0));
+}
+
+// With a minimum score no pose reaches, the search reports none.
+TEST(CorrelativeSearch, ReportsNothingBelowTheMinimumScore) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(8);
+  const Pose2 pose(3.0, -2.0, 2.0);
+  std::vector<Vector2> reference;
+  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
+    reference.push_back(transformFrom(pose, p));
+  }
+  const CorrelativeMatcherOptions options;
+  const std::vector<Vector2> query = pointsOf(sweep(world, pose, &rng));
+  const CorrelativeResult best =
+      correlativeSearch(query, LikelihoodGrid(reference, options), pose, 1.0, 0.1, options);
+  ASSERT_GT(best.score, 0.5);
+  const CorrelativeResult none = correlativeSearch(query, LikelihoodGrid(reference, options), pose,
+                                                   1.0, 0.1, options, best.score + 1e-6);
+  EXPECT_EQ(none.score, 0.0);
+  const CorrelativeResult same = correlativeSearch(query, LikelihoodGrid(reference, options), pose,
+                                                   1.0, 0.1, options, best.score - 1e-3);
+  EXPECT_NEAR(same.score, best.score, 1e-9);
+  EXPECT_LT(maxAbsDifference(same.pose, best.pose), 1e-9);
+}
+
 TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
-  // coarse_factor 1 makes the bound exact per translation, i.e. exhaustive.
+  // One level makes the bound exact per translation, i.e. exhaustive.
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(4);
   const Pose2 pose(3.0, -2.0, 2.0);
@@ -79,8 +123,8 @@ TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
   const std::vector<Vector2> query =
       pointsOf(sweep(world, compose(pose, Pose2(0.3, 0.1, 0.05)), &rng));
   CorrelativeMatcherOptions exhaustive;
-  exhaustive.coarse_factor = 1;
-  const CorrelativeMatcherOptions bounded;  // coarse_factor 8
+  exhaustive.levels = 1;
+  const CorrelativeMatcherOptions bounded;  // 7 levels
   const CorrelativeResult a =
       correlativeSearch(query, LikelihoodGrid(reference, exhaustive), pose, 1.0, 0.1, exhaustive);
   const CorrelativeResult b =

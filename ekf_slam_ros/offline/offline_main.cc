@@ -162,7 +162,8 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   line.precision(3);
   line << c.key_scans << " key scans, " << c.candidates << " candidates verified, " << c.accepted
        << " loops accepted (" << c.dropped << " dropped by the kernel at the end, "
-       << c.inconsistent << " refused as inconsistent with the graph), " << c.optimisations
+       << c.inconsistent << " refused as inconsistent with the graph, " << c.unconfirmed
+       << " wide-window matches never confirmed), " << c.optimisations
        << " optimisations; verification " << c.verification_seconds << " s, optimisation "
        << c.optimisation_seconds << " s";
   return line.str();

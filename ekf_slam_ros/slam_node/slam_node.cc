@@ -545,6 +545,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);
     status.add("loops refused as inconsistent", loops.inconsistent);
+    status.add("wide-window matches never confirmed", loops.unconfirmed);
     status.add("filter re-anchored", counters.reanchors);
   }
   if (live_map_) {
