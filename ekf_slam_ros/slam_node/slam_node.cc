@@ -255,17 +255,28 @@ void SlamNode::enqueue(PendingInput pending) {
   last_accepted_stamp_ = stamp;
   queue_.push_back(std::move(pending));
   while (static_cast<int>(queue_.size()) > params_.scan_queue_size) {
+    const PendingInput& oldest = queue_.front();
+    Pose2 unused;
+    std::string why;
     std::ostringstream overflow;
-    overflow << "scan at " << queue_.front().header.stamp.toSec() << " still waiting for "
-             << "tf when " << params_.scan_queue_size << " newer scans arrived (scan_queue_size)";
+    overflow.setf(std::ios::fixed);
+    overflow.precision(3);
+    overflow << "scan at " << oldest.header.stamp.toSec() << " still waiting for tf when "
+             << params_.scan_queue_size << " newer scans arrived (scan_queue_size)";
+    DropReason reason = DropReason::kQueueOverflow;
+    if (!lookup(params_.odom_frame, params_.base_frame, oldest.header.stamp, &unused, &why)) {
+      overflow << ": the odometry is silent, " << why;
+      reason = DropReason::kOdomTransformMissing;
+    }
     queue_.pop_front();
-    drop(DropReason::kQueueOverflow, overflow.str());
+    drop(reason, overflow.str());
   }
   drainQueue();
 }
 
 bool SlamNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
-                      Pose2* pose, std::string* why) const {
+                      Pose2* pose, std::string* why, bool* behind) const {
+  if (behind) *behind = false;
   try {
     const geometry_msgs::TransformStamped t = tf_buffer_.lookupTransform(target, source, stamp);
     *pose =
@@ -284,6 +295,7 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
         text << " (only a static transform? " << e.what() << ")";
       } else if (latest < stamp) {
         text << ": the newest is " << (stamp - latest).toSec() << " s older than the scan";
+        if (behind) *behind = true;
       } else {
         text << ": the scan is older than the transforms still buffered (" << e.what() << ")";
       }
@@ -302,8 +314,9 @@ void SlamNode::drainQueue() {
     const std::string& laser_frame = pending.header.frame_id;
     Pose2 odometry, laser;
     std::string odom_why, laser_why;
-    const bool have_odometry =
-        lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &odom_why);
+    bool odometry_behind = false;
+    const bool have_odometry = lookup(params_.odom_frame, params_.base_frame, stamp, &odometry,
+                                      &odom_why, &odometry_behind);
     const bool have_laser = lookup(params_.base_frame, laser_frame, stamp, &laser, &laser_why);
     if (have_odometry && have_laser) {
       const PendingInput input = std::move(queue_.front());
@@ -311,6 +324,10 @@ void SlamNode::drainQueue() {
       process(input, odometry, laser);
       continue;
     }
+    // Odometry that is alive but paused (a log records only motion; a
+    // driver that publishes on change) resumes with the next sample, which
+    // the scan needs for its interpolated pose: wait, bounded by the queue.
+    if (!have_odometry && odometry_behind && have_laser) return;
     const double waited = (ros::Time::now() - pending.received).toSec();
     if (waited < params_.tf_timeout && waited >= 0.0) return;  // wait for tf; order is kept
     std::ostringstream detail;

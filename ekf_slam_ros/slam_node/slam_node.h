@@ -5,7 +5,10 @@
 // Data flow per scan (all callbacks on one thread, ros::spin):
 //   scan → checks (stamp after the last one, enough valid readings, geometry)
 //        → queue until tf odom→base_link and base_link→laser exist at the
-//          scan's stamp (at most tf_timeout, then dropped and logged)
+//          scan's stamp: a transform never received, or base_link→laser
+//          late, is waited for at most tf_timeout (then dropped and
+//          logged); odometry that has paused (logs record only motion) is
+//          waited for until its next sample, at most scan_queue_size scans
 //        → SlamPipeline::processScan(scan, odometry)
 //        → tf map→odom, pose, path, landmarks, landmark_map, association.
 // With input: features the node takes ekf_slam/Features (feature_node's
@@ -52,7 +55,8 @@ enum class DropReason {
   kStampInFuture,          // stamp more than max_future_stamp ahead of the clock
   kTooFewValidReadings,    // NaN / no-return scan
   kBadScanGeometry,        // angle_increment 0, NaN angles, ...
-  kOdomTransformMissing,   // odom → base_link not available at the stamp within tf_timeout
+  kOdomTransformMissing,   // odom → base_link never received within tf_timeout, or silent
+                           // while scan_queue_size newer scans arrived
   kLaserTransformMissing,  // base_link → laser not available at the stamp within tf_timeout
   kQueueOverflow,          // more scans waiting for tf than scan_queue_size
   kPaused,                 // the pause service was called
@@ -83,9 +87,11 @@ class SlamNode {
   void enqueue(PendingInput pending);
   void drainQueue();
   // The transform target → source at `stamp`; false with a description of
-  // what is missing (frames, how late) in `why`.
+  // what is missing (frames, how late) in `why`. `behind` (optional) is set
+  // when the transform exists but its newest sample is older than `stamp`:
+  // its publisher is alive and the scan waits for the next sample.
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
-              Pose2* pose, std::string* why) const;
+              Pose2* pose, std::string* why, bool* behind = nullptr) const;
   void process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser);
   void drop(DropReason reason, const std::string& detail);
 
