@@ -24,6 +24,9 @@ class PrivateParams {
   // `required`: an empty or missing value is an error.
   void text(const std::string& key, std::string* value, bool required = true);
 
+  // A parameter another part of the node reads itself (diagnostic_updater's
+  // ~diagnostic_period): not an unknown key, and not checked here.
+  void allow(const std::string& key) { known_.insert(key); }
   // Records an error about `key` found by the caller's own checks.
   void fail(const std::string& key, const std::string& why);
   // Every private parameter nobody asked for is an error (a typo must not

@@ -46,6 +46,7 @@ bool loadDriverParams(const ros::NodeHandle& node, DriverParams* params, std::st
   if (params->odom_frame == params->base_frame) {
     load.fail("base_frame", "must differ from odom_frame");
   }
+  load.allow("diagnostic_period");  // diagnostic_updater's own
   load.rejectUnknown();
   *error = load.errors();
   return load.ok();

@@ -54,6 +54,7 @@ bool loadOptions(const ros::NodeHandle& pnh, NodeOptions* options, std::string* 
   read.flag("inverted", &options->message.inverted);
   read.number("reconnect_delay", &link.reconnect_delay, 0.01, 60.0);
   read.number("data_timeout", &link.data_timeout, 0.01, 60.0);
+  read.allow("diagnostic_period");  // diagnostic_updater's own
   read.rejectUnknown();
   if (!read.ok()) {
     *error = read.errors();
