@@ -1,13 +1,19 @@
 #include "ekf_slam_core/io/landmark_map.h"
 
 #include <Eigen/LU>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace ekf_slam {
 namespace {
@@ -104,7 +110,16 @@ std::string parseEntry(const std::string& body, LandmarkRecord* out) {
     return "covariance needs 4 values [xx, xy, yx, yy] (or 3: [xx, xy, yy]), got " +
            std::to_string(values.size());
   }
+  if (std::abs(r.position.x()) > kMaxLandmarkCoordinate ||
+      std::abs(r.position.y()) > kMaxLandmarkCoordinate) {
+    return "position beyond " + std::to_string(static_cast<long>(kMaxLandmarkCoordinate)) +
+           " m from the origin";
+  }
   const Matrix2& c = r.covariance;
+  if (c(0, 0) > kMaxLandmarkVariance || c(1, 1) > kMaxLandmarkVariance) {
+    return "covariance beyond " + std::to_string(static_cast<long>(kMaxLandmarkVariance)) +
+           " m^2 (a landmark known to no better than a kilometre)";
+  }
   if (std::abs(c(0, 1) - c(1, 0)) > 1e-9 * (1.0 + c.cwiseAbs().maxCoeff())) {
     return "covariance is not symmetric";
   }
@@ -122,7 +137,9 @@ std::string formatLandmarkMap(const LandmarkMapFile& map) {
   out.precision(17);  // enough digits for an exact double round trip
   out << "# EKF-SLAM point landmarks: x, y in m (frame below); covariance = the full 2x2\n"
          "# marginal [xx, xy, yx, yy] in m^2; observations = sightings (1: tentative).\n"
+      << "version: " << kLandmarkMapVersion << "\n"
       << "frame: " << map.frame << "\n"
+      << "count: " << map.landmarks.size() << "\n"
       << "landmarks:" << (map.landmarks.empty() ? " []" : "") << "\n";
   for (const LandmarkRecord& r : map.landmarks) {
     const Matrix2& c = r.covariance;
@@ -134,11 +151,37 @@ std::string formatLandmarkMap(const LandmarkMapFile& map) {
 }
 
 std::string writeLandmarkMap(const std::string& path, const LandmarkMapFile& map) {
-  std::ofstream out(path);
-  if (!out) return path + ": cannot open for writing";
-  out << formatLandmarkMap(map);
-  out.flush();
-  return out ? "" : path + ": write error";
+  const std::string text = formatLandmarkMap(map);
+  // A temporary file beside the target (same filesystem, so the rename is
+  // atomic), written in full and synced before it replaces anything.
+  std::string temp = path + ".XXXXXX";
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0) return path + ": cannot create a temporary file beside it: " + std::strerror(errno);
+  std::string error;
+  size_t done = 0;
+  while (done < text.size() && error.empty()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error = path + ": write error (" + std::string(n < 0 ? std::strerror(errno) : "no space") +
+              "); the earlier file is unchanged";
+    } else {
+      done += static_cast<size_t>(n);
+    }
+  }
+  if (error.empty() && ::fchmod(fd, 0644) != 0) {
+    error = path + ": cannot set the file mode: " + std::strerror(errno);
+  }
+  if (error.empty() && ::fsync(fd) != 0) {
+    error = path + ": cannot flush to the disk (" + std::strerror(errno) +
+            "); the earlier file is unchanged";
+  }
+  if (::close(fd) != 0 && error.empty()) error = path + ": close failed: " + std::strerror(errno);
+  if (error.empty() && std::rename(temp.c_str(), path.c_str()) != 0) {
+    error = path + ": cannot replace it: " + std::strerror(errno);
+  }
+  if (!error.empty()) ::unlink(temp.c_str());
+  return error;
 }
 
 std::string parseLandmarkMap(const std::string& text, const std::string& source,
@@ -146,6 +189,8 @@ std::string parseLandmarkMap(const std::string& text, const std::string& source,
   LandmarkMapFile result;
   std::set<int> ids;
   bool in_list = false, seen_list = false;
+  int version = 0;  // 0: a file from before the version key
+  long count = -1;  // -1: not given
   std::istringstream in(text);
   std::string raw;
   int line_number = 0;
@@ -177,6 +222,22 @@ std::string parseLandmarkMap(const std::string& text, const std::string& source,
     if (key == "frame") {
       if (value.empty()) return fail("frame must not be empty");
       result.frame = value;
+    } else if (key == "version") {
+      double v = 0.0;
+      if (!parseNumber(value, &v) || v != std::floor(v) || v < 1) {
+        return fail("version must be a positive integer, got '" + value + "'");
+      }
+      if (v > kLandmarkMapVersion) {
+        return fail("format version " + value + " is newer than this program reads (" +
+                    std::to_string(kLandmarkMapVersion) + ")");
+      }
+      version = static_cast<int>(v);
+    } else if (key == "count") {
+      double v = 0.0;
+      if (!parseNumber(value, &v) || v != std::floor(v) || v < 0 || v > 1e8) {
+        return fail("count must be a landmark count, got '" + value + "'");
+      }
+      count = static_cast<long>(v);
     } else if (key == "landmarks") {
       if (value == "[]") {
         seen_list = true;
@@ -190,6 +251,12 @@ std::string parseLandmarkMap(const std::string& text, const std::string& source,
     }
   }
   if (!seen_list) return source + ": no 'landmarks:' list";
+  if (version >= 1 && count < 0) return source + ": no 'count:' (required from version 1)";
+  if (count >= 0 && count != static_cast<long>(result.landmarks.size())) {
+    return source + ": " + std::to_string(result.landmarks.size()) +
+           " landmarks where 'count' says " + std::to_string(count) +
+           " (the file is cut short or edited)";
+  }
   *map = result;
   return "";
 }

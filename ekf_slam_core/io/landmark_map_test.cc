@@ -3,10 +3,14 @@
 #include "ekf_slam_core/io/landmark_map.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "ekf_slam_core/filter/ekf_slam.h"
 
@@ -108,6 +112,101 @@ TEST(LandmarkMapFile, ErrorsNameTheLineAndTheProblemAndLeaveTheMapAlone) {
             std::string::npos);
   EXPECT_NE(readLandmarkMap("/nonexistent/dir/map.yaml", &map).find("cannot open"),
             std::string::npos);
+}
+
+std::string fileContents(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+// A file cut at any line boundary inside the list is refused: the count in
+// the header says how many landmarks must follow.
+TEST(LandmarkMapFile, AFileCutShortIsRefused) {
+  const std::string text = formatLandmarkMap(randomMap(12, 3));
+  LandmarkMapFile map;
+  ASSERT_EQ(parseLandmarkMap(text, "whole.yaml", &map), "");
+  size_t cut = text.find("\nlandmarks:");
+  int refused = 0;
+  while ((cut = text.find('\n', cut + 1)) != std::string::npos && cut + 1 < text.size()) {
+    LandmarkMapFile partial = randomMap(2, 9);
+    const std::string error = parseLandmarkMap(text.substr(0, cut + 1), "cut.yaml", &partial);
+    EXPECT_NE(error.find("cut short"), std::string::npos) << error;
+    EXPECT_EQ(partial.landmarks.size(), 2u);  // untouched
+    ++refused;
+  }
+  EXPECT_EQ(refused, 12);  // every cut that keeps 0 … 11 of the 12 landmarks
+}
+
+TEST(LandmarkMapFile, VersionsAndAbsurdValues) {
+  LandmarkMapFile map;
+  // A file from before the version key: read as before.
+  EXPECT_EQ(parseLandmarkMap("frame: map\nlandmarks:\n"
+                             "  - {id: 1, x: 0, y: 0, covariance: [1, 0, 0, 1]}\n",
+                             "old.yaml", &map),
+            "");
+  EXPECT_NE(parseLandmarkMap("version: 2\ncount: 0\nlandmarks: []\n", "new.yaml", &map)
+                .find("newer than this program reads"),
+            std::string::npos);
+  EXPECT_NE(parseLandmarkMap("version: 1\nlandmarks: []\n", "v1.yaml", &map).find("no 'count:'"),
+            std::string::npos);
+  const std::string head = "version: 1\ncount: 1\nlandmarks:\n";
+  EXPECT_NE(parseLandmarkMap(head + "  - {id: 1, x: 0, y: 0, covariance: [1e300, 0, 0, 1]}\n",
+                             "huge.yaml", &map)
+                .find("covariance beyond"),
+            std::string::npos);
+  EXPECT_NE(parseLandmarkMap(head + "  - {id: 1, x: 1e7, y: 0, covariance: [1, 0, 0, 1]}\n",
+                             "far.yaml", &map)
+                .find("position beyond"),
+            std::string::npos);
+  EXPECT_NE(parseLandmarkMap(head + "  - {id: 1, x: 0, y: 0, covariance: [nan, 0, 0, 1]}\n",
+                             "nan.yaml", &map)
+                .find("finite"),
+            std::string::npos);
+}
+
+// A save that fails halfway (here the kernel refuses writes beyond a file
+// size limit, as a full disk refuses blocks) leaves the earlier map
+// byte-identical and no temporary file behind.
+TEST(LandmarkMapFile, AFailedSaveLeavesTheEarlierFileUntouched) {
+  char dir[] = "/tmp/landmark_map_saveXXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/map.yaml";
+  ASSERT_EQ(writeLandmarkMap(path, randomMap(5, 1)), "");
+  const std::string before = fileContents(path);
+  const std::string bigger = formatLandmarkMap(randomMap(400, 2));
+  ASSERT_GT(bigger.size(), 2 * before.size());
+
+  struct FileSizeLimit {  // RLIMIT_FSIZE for this process, restored at scope exit
+    rlimit saved{};
+    void (*handler)(int) = nullptr;
+    explicit FileSizeLimit(rlim_t bytes) {
+      ::getrlimit(RLIMIT_FSIZE, &saved);
+      handler = std::signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead
+      rlimit limited = saved;
+      limited.rlim_cur = bytes;
+      ::setrlimit(RLIMIT_FSIZE, &limited);
+    }
+    ~FileSizeLimit() {
+      ::setrlimit(RLIMIT_FSIZE, &saved);
+      std::signal(SIGXFSZ, handler);
+    }
+  };
+  std::string error;
+  {
+    const FileSizeLimit limit(before.size() + 100);
+    error = writeLandmarkMap(path, randomMap(400, 2));
+  }
+  EXPECT_NE(error.find("earlier file is unchanged"), std::string::npos) << error;
+  EXPECT_EQ(fileContents(path), before);
+  // Nothing else left in the directory.
+  EXPECT_EQ(std::system(("test $(ls -A " + std::string(dir) + " | wc -l) -eq 1").c_str()), 0);
+  // And without the limit the same save goes through.
+  ASSERT_EQ(writeLandmarkMap(path, randomMap(400, 2)), "");
+  EXPECT_EQ(fileContents(path), bigger);
+  std::remove(path.c_str());
+  ::rmdir(dir);
 }
 
 TEST(SeedingTheFilter, LoadedLandmarksKeepIdsMeansCovariancesAndAreUncorrelated) {
