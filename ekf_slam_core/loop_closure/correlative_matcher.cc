@@ -25,8 +25,13 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
     high = high.cwiseMax(p);
   }
   origin_ = low - Vector2::Constant(reach + resolution_);
-  width_ = static_cast<int>(std::ceil((high.x() - origin_.x() + reach) / resolution_)) + 2;
-  height_ = static_cast<int>(std::ceil((high.y() - origin_.y() + reach) / resolution_)) + 2;
+  const double cells_x = std::ceil((high.x() - origin_.x() + reach) / resolution_) + 2.0;
+  const double cells_y = std::ceil((high.y() - origin_.y() + reach) / resolution_) + 2.0;
+  // A submap kilometres across is corrupt input, not a place: no grid (the
+  // search then finds nothing) rather than an unbounded allocation.
+  if (!(cells_x * cells_y <= kMaxCells)) return;
+  width_ = static_cast<int>(cells_x);
+  height_ = static_cast<int>(cells_y);
   const size_t cells_total = static_cast<size_t>(width_) * height_;
   levels_.assign(1, std::vector<float>(cells_total, 0.0f));
   std::vector<float>& fine = levels_[0];

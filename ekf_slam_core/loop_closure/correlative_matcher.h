@@ -39,6 +39,9 @@ struct CorrelativeMatcherOptions {
 // The likelihood field of a reference point set, with its bounding levels.
 class LikelihoodGrid {
  public:
+  // Larger point sets (kilometres across: corrupt poses) give an empty grid.
+  static constexpr double kMaxCells = 2.5e7;
+
   LikelihoodGrid(const std::vector<Vector2>& points, const CorrelativeMatcherOptions& options);
 
   // Fine cell of a point (may lie outside the grid).

@@ -23,6 +23,7 @@ std::string OccupancyGridOptions::validate() const {
   if (!(max_insert_range > 0.0)) return "max_insert_range must be > 0 (m)";
   if (!(no_return_free_range >= 0.0)) return "no_return_free_range must be >= 0 (m)";
   if (!(grow_margin > 0.0)) return "grow_margin must be > 0 (m)";
+  if (!(max_cells >= 1.0)) return "max_cells must be >= 1";
   return "";
 }
 
@@ -40,14 +41,15 @@ bool OccupancyGrid::cellOf(double x, double y, int* ix, int* iy) const {
   return true;
 }
 
-void OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
+bool OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
+  if (!a.allFinite() || !b.allFinite()) return false;
   const double res = options_.resolution;
   const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
   const double min_y = std::min(a.y(), b.y()), max_y = std::max(a.y(), b.y());
   const double cur_max_x = origin_.x() + width_ * res, cur_max_y = origin_.y() + height_ * res;
   if (width_ > 0 && min_x >= origin_.x() && min_y >= origin_.y() && max_x < cur_max_x &&
       max_y < cur_max_y) {
-    return;
+    return true;
   }
   const double margin = options_.grow_margin;
   double new_min_x = min_x - margin, new_min_y = min_y - margin;
@@ -64,8 +66,13 @@ void OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
   const Vector2 new_origin = width_ > 0
                                  ? Vector2(origin_.x() - shift_x * res, origin_.y() - shift_y * res)
                                  : Vector2(new_min_x, new_min_y);
-  const int new_width = static_cast<int>(std::ceil((new_max_x - new_origin.x()) / res)) + 1;
-  const int new_height = static_cast<int>(std::ceil((new_max_y - new_origin.y()) / res)) + 1;
+  // Checked in floating point first: a corrupt pose kilometres off must not
+  // overflow the cell count or allocate without bound.
+  const double cells_x = std::ceil((new_max_x - new_origin.x()) / res) + 1.0;
+  const double cells_y = std::ceil((new_max_y - new_origin.y()) / res) + 1.0;
+  if (!(cells_x * cells_y <= options_.max_cells)) return false;
+  const int new_width = static_cast<int>(cells_x);
+  const int new_height = static_cast<int>(cells_y);
   std::vector<float> grid(static_cast<size_t>(new_width) * new_height, 0.0f);
   std::vector<uint8_t> touched(grid.size(), 0);
   for (int iy = 0; iy < height_; ++iy) {
@@ -81,6 +88,7 @@ void OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
   height_ = new_height;
   log_odds_.swap(grid);
   touched_.swap(touched);
+  return true;
 }
 
 void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
@@ -126,7 +134,10 @@ void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
     }
     const double bearing = laser_pose.theta + scan.angle(i);
     const Vector2 end = origin + length * Vector2(std::cos(bearing), std::sin(bearing));
-    ensureContains(origin, end);
+    if (!ensureContains(origin, end)) {
+      ++rays_beyond_limit_;
+      continue;
+    }
     int x0, y0, x1, y1;
     if (!cellOf(origin.x(), origin.y(), &x0, &y0) || !cellOf(end.x(), end.y(), &x1, &y1)) continue;
     traceRay(x0, y0, x1, y1, hit);
@@ -137,7 +148,10 @@ void OccupancyGrid::insertHits(const Vector2& origin, const std::vector<Vector2>
   if (!origin.allFinite()) return;
   for (const Vector2& end : endpoints) {
     if (!end.allFinite() || (end - origin).norm() > options_.max_insert_range) continue;
-    ensureContains(origin, end);
+    if (!ensureContains(origin, end)) {
+      ++rays_beyond_limit_;
+      continue;
+    }
     int x0, y0, x1, y1;
     if (!cellOf(origin.x(), origin.y(), &x0, &y0) || !cellOf(end.x(), end.y(), &x1, &y1)) continue;
     traceRay(x0, y0, x1, y1, /*mark_end=*/true);

@@ -25,6 +25,11 @@ struct OccupancyGridOptions {
   double max_insert_range = 30.0;     // m: longer readings are not inserted
   double no_return_free_range = 0.0;  // m: clear this far along no-return beams (0: do not)
   double grow_margin = 10.0;          // m added on each side when the grid grows
+  // The grid never grows beyond this many cells (5 bytes each while it
+  // grows: about 500 MB). A ray that would need more (a pose kilometres
+  // off: corrupt odometry) is left out and counted, instead of an
+  // allocation that exhausts the machine.
+  double max_cells = 1.0e8;
 
   std::string validate() const;
 };
@@ -41,7 +46,8 @@ class OccupancyGrid {
   // pose ± max_insert_range), this replaces the repeated reallocations of a
   // grid that grows scan by scan: on a 400 m site those copies dominated the
   // time and doubled the peak memory.
-  void cover(const Vector2& low, const Vector2& high) { ensureContains(low, high); }
+  // False (and the grid unchanged) when that would exceed max_cells.
+  bool cover(const Vector2& low, const Vector2& high) { return ensureContains(low, high); }
 
   // Inserts beams from `origin` that ended at `endpoints` (map frame): each
   // a hit at its end, free space before it (a key scan's kept readings).
@@ -69,9 +75,13 @@ class OccupancyGrid {
   // file name). Returns an empty string on success, else the error.
   std::string save(const std::string& base_path) const;
 
+  // Rays left out because the grid would have exceeded max_cells.
+  long raysBeyondLimit() const { return rays_beyond_limit_; }
+
  private:
   bool cellOf(double x, double y, int* ix, int* iy) const;
-  void ensureContains(const Vector2& a, const Vector2& b);
+  // False when holding [a, b] would exceed max_cells (nothing changes).
+  bool ensureContains(const Vector2& a, const Vector2& b);
   void traceRay(int x0, int y0, int x1, int y1, bool mark_end);
   float& at(int ix, int iy) { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
   float at(int ix, int iy) const { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
@@ -82,6 +92,7 @@ class OccupancyGrid {
   int width_ = 0, height_ = 0;
   std::vector<float> log_odds_;  // 0 = unknown
   std::vector<uint8_t> touched_;
+  long rays_beyond_limit_ = 0;
 };
 
 }  // namespace ekf_slam

@@ -168,6 +168,14 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   usable = odometry.allFinite() && input_error.empty() && std::isfinite(stamp);
   if (scan_matcher_ && odometry.allFinite()) {
     if (usable) {
+      // The filter's jump rule on the raw increment, before it becomes the
+      // match's guess: a corrupt sample must not carry the front end (and
+      // the key scans of the back end) kilometres away.
+      if (scan_matcher_->isOdometryJump(raw_odometry, options_.filter.max_step_translation,
+                                        options_.filter.max_step_rotation)) {
+        scan_matcher_->reanchorRaw(raw_odometry);
+        ++counters_.odometry_jumps;
+      }
       MatchResult match;
       odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
       if (match.ok) {

@@ -261,6 +261,14 @@ ScanMatchingOdometry::ScanMatchingOdometry(const ScanMatcherOptions& options,
                          ? chiSquareQuantile(options.odometry_gate_probability, 3.0)
                          : 0.0) {}
 
+bool ScanMatchingOdometry::isOdometryJump(const Pose2& raw_odometry, double max_translation,
+                                          double max_rotation) const {
+  if (!initialised_) return false;
+  const OdometryControl u = controlFromOdometry(last_raw_, raw_odometry);
+  return !(std::abs(u.trans) <= max_translation &&
+           std::abs(wrapAngle(u.rot1 + u.rot2)) <= max_rotation);
+}
+
 double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry, const Pose2& matched,
                                                   double dt) const {
   // Both increments in the frame of the last corrected pose; the odometry

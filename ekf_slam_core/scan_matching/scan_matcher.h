@@ -163,6 +163,17 @@ class ScanMatchingOdometry {
     return initialised_ ? compose(last_corrected_, between(last_raw_, raw_odometry)) : raw_odometry;
   }
 
+  // True when the raw odometry moved from the last scan's by more than
+  // max_translation (m) or turned by more than max_rotation (rad): the
+  // filter's jump rule (a corrupt sample, a driver reset), applied to the
+  // raw increment before it becomes the match's guess.
+  bool isOdometryJump(const Pose2& raw_odometry, double max_translation, double max_rotation) const;
+  // Discards the raw increment since the last scan: the next scan starts
+  // from `raw_odometry` with the corrected pose where it was.
+  void reanchorRaw(const Pose2& raw_odometry) {
+    if (initialised_) last_raw_ = raw_odometry;
+  }
+
   const ScanMatcherCounters& counters() const { return counters_; }
   size_t mapPoints() const { return reference_ ? reference_->size() : 0; }
 

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "ekf_slam_core/io/carmen_log.h"
 #include "ekf_slam_core/pipeline/odometry_track.h"
@@ -44,6 +45,36 @@ void finish(LogData* out, const OdometryTrack& track, double max_gap) {
     }
     out->first_stamp = lo;
     out->last_stamp = hi;
+  }
+}
+
+// Leaves out scans with a non-finite stamp or odometry pose, counted; the
+// stamp range is taken over the rest.
+void dropUnusable(LogData* log) {
+  std::vector<LoggedScan> kept;
+  kept.reserve(log->scans.size());
+  for (size_t i = 0; i < log->scans.size(); ++i) {
+    LoggedScan& s = log->scans[i];
+    if (std::isfinite(s.scan.stamp) && s.odometry.allFinite()) {
+      kept.push_back(std::move(s));
+      continue;
+    }
+    if (log->unusable_scans++ == 0) {
+      std::ostringstream what;
+      what << "scan " << i << " (stamp " << s.scan.stamp << ", odometry " << s.odometry.x << " "
+           << s.odometry.y << " " << s.odometry.theta << ")";
+      log->first_unusable = what.str();
+    }
+  }
+  log->scans.swap(kept);
+  if (!log->scans.empty()) {
+    double lo = log->scans.front().scan.stamp, hi = lo;
+    for (const LoggedScan& s : log->scans) {
+      lo = std::min(lo, s.scan.stamp);
+      hi = std::max(hi, s.scan.stamp);
+    }
+    log->first_stamp = lo;
+    log->last_stamp = hi;
   }
 }
 
@@ -145,6 +176,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
       }
     }
   }
+  dropUnusable(&data);
   *out = std::move(data);
   return "";
 }
@@ -173,6 +205,7 @@ std::string readCarmen(const std::string& path, LogData* out) {
   for (size_t i = 0; i < data.scans.size(); ++i)
     data.scans[i].odometry = log.lasers[i].robot_odometry;
   data.odometry_gaps = 0;
+  dropUnusable(&data);
   *out = std::move(data);
   return "";
 }

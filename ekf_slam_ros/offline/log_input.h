@@ -36,6 +36,10 @@ struct LogData {
   long odometry_samples = 0;
   long odometry_gaps = 0;  // scans whose odometry was not interpolated
   long scans_out_of_time_order = 0;
+  // Scans left out because their stamp or odometry pose is not finite (a
+  // corrupt log line or message): they never reach the filter or a file.
+  long unusable_scans = 0;
+  std::string first_unusable;  // which one, for the report
   double first_stamp = 0.0, last_stamp = 0.0;
   double duration() const { return last_stamp - first_stamp; }
 };

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "ekf_slam_core/eval/relations.h"
@@ -280,6 +281,67 @@ TEST_F(OfflineRunner, ACarmenLineWithAWrongFieldCountExitsNonZeroNamingTheLine) 
   EXPECT_NE(message.find(input_ + ":3: ODOM line has 9 fields, expected 10"), std::string::npos)
       << message;
   EXPECT_FALSE(reportExists());
+}
+
+// A CARMEN log of a robot driving along a 20 m × 8 m room (FLASER lines
+// with their odometry), one line of which is corrupted by `corrupt`.
+void writeRoomCarmen(const std::string& path,
+                     const std::function<void(double*, double*)>& corrupt) {
+  std::ofstream out(path);
+  out.precision(17);
+  for (int k = 0; k < 300; ++k) {
+    const double x = 0.03 * k;
+    double odometry_x = x, stamp = 1000.0 + 0.2 * k;
+    if (k == 150) corrupt(&odometry_x, &stamp);
+    out << "FLASER 180";
+    for (int i = 0; i < 180; ++i) {
+      const double a = -kPi / 2 + i * kPi / 179;
+      const double c = std::cos(a), sn = std::sin(a);
+      double best = 80.0;
+      if (c > 1e-9) best = std::min(best, (15.0 - x) / c);
+      if (c < -1e-9) best = std::min(best, (-5.0 - x) / c);
+      if (sn > 1e-9) best = std::min(best, 4.0 / sn);
+      if (sn < -1e-9) best = std::min(best, -4.0 / sn);
+      out << " " << best;
+    }
+    out << " " << odometry_x << " 0 0 " << odometry_x << " 0 0 " << stamp << " host " << stamp
+        << "\n";
+  }
+}
+
+// Odometry kilometres off (1e300, 1e7 m) for one scan, or a NaN pose or
+// stamp: the runner finishes (exit 0), the jump is counted as the live
+// node's filter counts it, a non-finite scan is left out and counted, and
+// no output file holds a NaN. (Before, 1e7 m made the occupancy grid and
+// the loop search allocate without bound and abort.)
+TEST_F(OfflineRunner, HostileOdometryIsCountedNeverAborts) {
+  struct Case {
+    std::string name;
+    std::function<void(double*, double*)> corrupt;
+    std::string report_line;
+  };
+  const Case cases[] = {
+      {"x 1e300", [](double* x, double*) { *x = 1e300; }, "odometry jumps: 2"},
+      {"x 1e7", [](double* x, double*) { *x = 1e7; }, "odometry jumps: 2"},
+      {"x NaN", [](double* x, double*) { *x = std::nan(""); },
+       "scans left out (non-finite stamp or odometry): 1"},
+      {"stamp NaN", [](double*, double* t) { *t = std::nan(""); },
+       "scans left out (non-finite stamp or odometry): 1"},
+  };
+  for (const Case& c : cases) {
+    writeRoomCarmen(input_, c.corrupt);
+    std::string message;
+    ASSERT_EQ(run("--carmen", &message), 0) << c.name << ": " << message;
+    std::ifstream report_file(out_ + "/report.txt");
+    const std::string report((std::istreambuf_iterator<char>(report_file)),
+                             std::istreambuf_iterator<char>());
+    EXPECT_NE(report.find(c.report_line), std::string::npos) << c.name << "\n" << report;
+    EXPECT_NE(std::system(("grep -qil nan '" + out_ + "'/trajectory_*.txt '" + out_ +
+                           "'/landmarks.yaml '" + out_ + "'/*.yaml")
+                              .c_str()),
+              0)
+        << c.name << ": a NaN in an output file";
+  }
 }
 
 TEST_F(OfflineRunner, AGoodBagGivesAReportAndExitCodeZero) {

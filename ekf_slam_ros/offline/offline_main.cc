@@ -82,6 +82,12 @@ ekf_slam::OccupancyGrid buildMap(const ekf_slam::OccupancyGridOptions& options,
   for (size_t i = 0; i < poses.size() && i < log.scans.size(); ++i) {
     grid.insertScan(ekf_slam::compose(poses[i].pose, laser), log.scans[i].scan);
   }
+  if (grid.raysBeyondLimit() > 0) {
+    std::cerr << "ekf_slam_offline: warning: " << grid.raysBeyondLimit()
+              << " rays left out of a map: they reach so far from the others that the grid "
+                 "would exceed map.max_cells ("
+              << options.max_cells << " cells); a pose is corrupt or far off\n";
+  }
   return grid;
 }
 
@@ -237,6 +243,11 @@ int main(int argc, char** argv) {
     std::cerr << "ekf_slam_offline: " << input_error << "\n";
     return 2;
   }
+  if (log.unusable_scans > 0) {
+    std::cerr << "ekf_slam_offline: warning: " << log.unusable_scans
+              << " scans left out: their stamp or odometry is not finite (the first: "
+              << log.first_unusable << ")\n";
+  }
   if (max_scans >= 0 && static_cast<size_t>(max_scans) < log.scans.size()) {
     log.scans.resize(max_scans);
     log.last_stamp = log.first_stamp;
@@ -380,6 +391,8 @@ int main(int argc, char** argv) {
   report << "input: " << (bag_path.empty() ? carmen_path : bag_path) << "\n"
          << "scans: " << total << " (" << log.scans_out_of_time_order
          << " with a stamp not after the previous one)\n"
+         << "scans left out (non-finite stamp or odometry): " << log.unusable_scans
+         << (log.unusable_scans > 0 ? ", the first " + log.first_unusable : std::string()) << "\n"
          << "data duration: " << log.duration() << " s\n"
          << "odometry samples: " << log.odometry_samples << ", scans with an odometry gap > "
          << config.input.max_odometry_gap << " s: " << log.odometry_gaps << "\n"

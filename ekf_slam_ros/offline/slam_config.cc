@@ -206,6 +206,7 @@ void bindMap(YamlBinder b, OccupancyGridOptions* m) {
   b.number("clamp_log_odds", &m->clamp_log_odds, 1e-3, 100.0);
   b.number("max_insert_range", &m->max_insert_range, 1e-3, kHuge);
   b.number("no_return_free_range", &m->no_return_free_range, 0.0, kHuge);
+  b.number("max_cells", &m->max_cells, 1.0, 1e10);
   b.rejectUnknownKeys();
 }
 
