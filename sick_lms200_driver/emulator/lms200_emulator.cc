@@ -79,13 +79,14 @@ void Lms200Emulator::enqueue(const std::vector<uint8_t>& bytes, double start) {
   line_free_at_ = t;
 }
 
-void Lms200Emulator::reply(uint8_t request_command, const std::vector<uint8_t>& data,
-                           double start) {
-  std::vector<uint8_t> bytes{kAck};
-  const std::vector<uint8_t> telegram =
-      encodeTelegram(kSensorAddress, static_cast<uint8_t>(request_command + kReplyOffset), data);
-  bytes.insert(bytes.end(), telegram.begin(), telegram.end());
-  enqueue(bytes, start);
+void Lms200Emulator::reply(uint8_t request_command, const std::vector<uint8_t>& data, double start,
+                           double work) {
+  // The device acknowledges at once (within 60 ms) and answers once the
+  // work (an EEPROM write) is done.
+  enqueue({kAck}, start);
+  enqueue(
+      encodeTelegram(kSensorAddress, static_cast<uint8_t>(request_command + kReplyOffset), data),
+      start + work);
 }
 
 void Lms200Emulator::handleRequest(const Telegram& request, double now) {
@@ -163,8 +164,8 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       const bool ok =
           installation_mode_ && data.size() == kConfigSize && data[kConfigUnitsIndex] <= 1;
       if (ok) config_ = data;
-      reply(request.command, {static_cast<uint8_t>(ok ? 1 : 0), status_byte_},
-            ok ? start + options_.config_write_delay : start);
+      reply(request.command, {static_cast<uint8_t>(ok ? 1 : 0), status_byte_}, start,
+            ok ? options_.config_write_delay : 0.0);
       return;
     }
     default:

@@ -33,7 +33,7 @@ struct EmulatorOptions {
   Units units = Units::kMillimetres;  // power-on units
   double range_noise_sigma = 0.01;    // m, Gaussian, on ranges that hit something
   std::string type_string = "LMS200;30106;V02.10 ;S01.31 ";
-  double config_write_delay = 0.5;  // s before the 0x77 reply (EEPROM write)
+  double config_write_delay = 0.5;  // s between the 0x77 ACK and its reply (EEPROM write)
   // Fault injection, probabilities in [0, 1].
   double bad_crc_rate = 0.0;    // per streamed scan: checksum corrupted
   double drop_byte_rate = 0.0;  // per streamed scan: one byte lost
@@ -86,7 +86,9 @@ class Lms200Emulator {
  private:
   void handleInput(double now);
   void handleRequest(const Telegram& request, double now);
-  void reply(uint8_t request_command, const std::vector<uint8_t>& data, double start);
+  // ACK at `start`, the reply telegram `work` seconds later.
+  void reply(uint8_t request_command, const std::vector<uint8_t>& data, double start,
+             double work = 0.0);
   void enqueue(const std::vector<uint8_t>& bytes, double start);
   void streamScans(double now);
   void sendScan(double first_beam_time);

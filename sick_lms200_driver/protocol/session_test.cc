@@ -105,6 +105,60 @@ TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
   EXPECT_TRUE(session.stopStreaming()) << session.error();
 }
 
+// A client that times the device: every request, the slow configuration
+// write (0x77) included, is acknowledged within 60 ms of its last byte, as
+// a real LMS200 does; the write's reply follows once the EEPROM is written
+// (config_write_delay). Clients time out waiting for the ACK otherwise.
+TEST(Session, AcknowledgesEveryRequestWithin60MsAndAnswersSlowWritesLater) {
+  EmulatorOptions options;
+  options.config_write_delay = 0.5;
+  EmulatorFixture emulator(options, "/tmp/lms200_session_test_ack");
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600)) << port.error();
+  TelegramDecoder decoder(kSensorAddress);
+  // Sends `request`; the seconds until its ACK and until its reply telegram.
+  auto timed = [&](uint8_t command, const std::vector<uint8_t>& data, double* ack, double* reply,
+                   Telegram* telegram) {
+    const std::vector<uint8_t> bytes = encodeTelegram(kHostAddress, command, data);
+    ASSERT_EQ(port.write(bytes.data(), bytes.size()), serial_io::IoStatus::kOk);
+    const double sent = wallNow();
+    *ack = *reply = -1.0;
+    while (*reply < 0.0 && wallNow() - sent < 3.0) {
+      uint8_t buffer[256];
+      const auto result = port.read(buffer, sizeof(buffer), std::chrono::milliseconds(5));
+      decoder.feed(buffer, result.bytes);
+      DecoderEvent event;
+      while (decoder.next(&event)) {
+        if (event.kind == DecoderEvent::Kind::kAck && *ack < 0.0) *ack = wallNow() - sent;
+        if (event.kind == DecoderEvent::Kind::kTelegram) {
+          *reply = wallNow() - sent;
+          *telegram = event.telegram;
+        }
+      }
+    }
+  };
+  double ack = 0.0, reply = 0.0;
+  Telegram answer;
+  const std::string password = kInstallationPassword;
+  std::vector<uint8_t> installation{mode::kInstallation};
+  installation.insert(installation.end(), password.begin(), password.end());
+  timed(cmd::kModeChange, installation, &ack, &reply, &answer);
+  EXPECT_GE(ack, 0.0);
+  EXPECT_LE(ack, 0.060) << "installation mode";
+  ASSERT_GE(reply, 0.0);
+  timed(cmd::kReadConfig, {}, &ack, &reply, &answer);
+  EXPECT_LE(ack, 0.060) << "read configuration";
+  ASSERT_GE(reply, 0.0);
+  ASSERT_GE(answer.data.size(), kConfigSize);
+  const std::vector<uint8_t> config(answer.data.begin(), answer.data.begin() + kConfigSize);
+  timed(cmd::kWriteConfig, config, &ack, &reply, &answer);
+  EXPECT_GE(ack, 0.0);
+  EXPECT_LE(ack, 0.060) << "write configuration: the ACK must not wait for the EEPROM";
+  EXPECT_GE(reply, 0.45) << "the reply comes once the configuration is written";
+  ASSERT_FALSE(answer.data.empty());
+  EXPECT_EQ(answer.data[0], 1) << "write accepted";
+}
+
 TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
   EmulatorOptions emulator_options;
   emulator_options.initial_baud = 19200;  // left at another rate by a previous run
@@ -128,6 +182,29 @@ TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
     EXPECT_EQ(e.angleDeg(), 100);
     EXPECT_EQ(e.resolutionCentideg(), 25);
     EXPECT_EQ(e.units(), Units::kCentimetres);
+    return 0;
+  });
+}
+
+// A slow device: the configuration write is acknowledged at once and
+// answered only after 3 s. The driver waits for the reply (config_timeout)
+// instead of resending the write, and the units change.
+TEST(Session, ChangesUnitsOnADeviceThatAnswersTheWriteAfterThreeSeconds) {
+  EmulatorOptions emulator_options;
+  emulator_options.config_write_delay = 3.0;
+  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_slow");
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600));
+  TelegramDecoder decoder(kSensorAddress);
+  SessionOptions options;
+  options.baud = 38400;
+  options.units = Units::kCentimetres;
+  Session session(
+      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  ASSERT_TRUE(session.initialize()) << session.error();
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    EXPECT_EQ(e.units(), Units::kCentimetres);
+    EXPECT_TRUE(e.streaming());
     return 0;
   });
 }
