@@ -41,6 +41,7 @@ build: deps workspace
 check:
 	@tools/check_core_ros_free.sh
 	@tools/check_format.sh
+	@tools/check_catkin_lint.sh
 
 test: build check
 	@tools/run_tests.sh $(WS)

@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   # build
-  build-essential cmake pkgconf catkin clang-format
+  build-essential cmake pkgconf catkin clang-format catkin-lint
   # ROS 1 from Debian
   ros-core-dev libroscpp-dev librosbag-dev librostest-dev python3-rostest rosbash
   libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
