@@ -27,6 +27,18 @@ double yawOf(double x, double y, double z, double w) {
   return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
+// The earliest and the latest scan stamp (file order need not be time order).
+void setStampRange(LogData* log) {
+  if (log->scans.empty()) return;
+  double lo = log->scans.front().scan.stamp, hi = lo;
+  for (const LoggedScan& s : log->scans) {
+    lo = std::min(lo, s.scan.stamp);
+    hi = std::max(hi, s.scan.stamp);
+  }
+  log->first_stamp = lo;
+  log->last_stamp = hi;
+}
+
 void finish(LogData* out, const OdometryTrack& track, double max_gap) {
   out->odometry_samples = static_cast<long>(track.size());
   double previous = -std::numeric_limits<double>::infinity();
@@ -37,15 +49,7 @@ void finish(LogData* out, const OdometryTrack& track, double max_gap) {
     if (s.scan.stamp <= previous) ++out->scans_out_of_time_order;
     previous = s.scan.stamp;
   }
-  if (!out->scans.empty()) {
-    double lo = out->scans.front().scan.stamp, hi = lo;
-    for (const LoggedScan& s : out->scans) {
-      lo = std::min(lo, s.scan.stamp);
-      hi = std::max(hi, s.scan.stamp);
-    }
-    out->first_stamp = lo;
-    out->last_stamp = hi;
-  }
+  setStampRange(out);
 }
 
 // Leaves out scans with a non-finite stamp or odometry pose, counted; the
@@ -67,15 +71,7 @@ void dropUnusable(LogData* log) {
     }
   }
   log->scans.swap(kept);
-  if (!log->scans.empty()) {
-    double lo = log->scans.front().scan.stamp, hi = lo;
-    for (const LoggedScan& s : log->scans) {
-      lo = std::min(lo, s.scan.stamp);
-      hi = std::max(hi, s.scan.stamp);
-    }
-    log->first_stamp = lo;
-    log->last_stamp = hi;
-  }
+  setStampRange(log);
 }
 
 }  // namespace
