@@ -49,14 +49,20 @@ std::vector<Pose2> twoLaps() {
   return poses;
 }
 
+// A sweep taken at `pose`, its points placed in the world frame.
+std::vector<Vector2> placedSweep(const sim::PolygonWorld& world, const Pose2& pose,
+                                 std::mt19937* rng) {
+  std::vector<Vector2> placed;
+  for (const Vector2& p : pointsOf(sweep(world, pose, rng)))
+    placed.push_back(transformFrom(pose, p));
+  return placed;
+}
+
 TEST(CorrelativeSearch, FindsAPoseMetresAndDegreesFromTheGuess) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(3);
   const Pose2 reference_pose(-2.0, 1.0, 0.4), query_pose(-1.2, 0.6, 0.3);
-  std::vector<Vector2> reference;
-  for (const Vector2& p : pointsOf(sweep(world, reference_pose, &rng))) {
-    reference.push_back(transformFrom(reference_pose, p));
-  }
+  const std::vector<Vector2> reference = placedSweep(world, reference_pose, &rng);
   const CorrelativeMatcherOptions options;
   const LikelihoodGrid grid(reference, options);
   const Pose2 guess = compose(query_pose, Pose2(1.2, -0.9, degToRad(8.0)));
@@ -73,10 +79,7 @@ TEST(CorrelativeSearch, FindsThePoseAnywhereInAHugeWindowAtAnyHeading) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(7);
   const Pose2 pose(3.0, -2.0, 2.0);
-  std::vector<Vector2> reference;
-  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
-    reference.push_back(transformFrom(pose, p));
-  }
+  const std::vector<Vector2> reference = placedSweep(world, pose, &rng);
   const Pose2 query_pose = compose(pose, Pose2(0.4, 0.2, 0.3));
   const CorrelativeMatcherOptions options;
   const LikelihoodGrid grid(reference, options);
@@ -93,10 +96,7 @@ TEST(CorrelativeSearch, ReportsNothingBelowTheMinimumScore) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(8);
   const Pose2 pose(3.0, -2.0, 2.0);
-  std::vector<Vector2> reference;
-  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
-    reference.push_back(transformFrom(pose, p));
-  }
+  const std::vector<Vector2> reference = placedSweep(world, pose, &rng);
   const CorrelativeMatcherOptions options;
   const std::vector<Vector2> query = pointsOf(sweep(world, pose, &rng));
   const CorrelativeResult best =
@@ -116,10 +116,7 @@ TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(4);
   const Pose2 pose(3.0, -2.0, 2.0);
-  std::vector<Vector2> reference;
-  for (const Vector2& p : pointsOf(sweep(world, pose, &rng))) {
-    reference.push_back(transformFrom(pose, p));
-  }
+  const std::vector<Vector2> reference = placedSweep(world, pose, &rng);
   const std::vector<Vector2> query =
       pointsOf(sweep(world, compose(pose, Pose2(0.3, 0.1, 0.05)), &rng));
   CorrelativeMatcherOptions exhaustive;
