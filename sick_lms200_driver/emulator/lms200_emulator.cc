@@ -164,8 +164,13 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       const bool ok =
           installation_mode_ && data.size() == kConfigSize && data[kConfigUnitsIndex] <= 1;
       if (ok) config_ = data;
-      reply(request.command, {static_cast<uint8_t>(ok ? 1 : 0), status_byte_}, start,
-            ok ? options_.config_write_delay : 0.0);
+      // 0xF7: accepted (1) or not (0), then the configuration the sensor
+      // now holds, then the status byte.
+      std::vector<uint8_t> answer(1 + config_.size() + 1);
+      answer.front() = ok ? 1 : 0;
+      std::copy(config_.begin(), config_.end(), answer.begin() + 1);
+      answer.back() = status_byte_;
+      reply(request.command, answer, start, ok ? options_.config_write_delay : 0.0);
       return;
     }
     default:

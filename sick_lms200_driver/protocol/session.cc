@@ -97,7 +97,7 @@ bool Session::transact(uint8_t command, const std::vector<uint8_t>& data, Telegr
       }
       decoder_.feed(buffer, result.bytes);
     }
-    if (retry) std::this_thread::sleep_for(milliseconds(30));  // let the sensor settle
+    if (retry) pause_(milliseconds(30));  // let the sensor settle
   }
   return fail("command " + hexByte(command) + ": " + last_problem + " after " +
               std::to_string(attempts) + " attempt(s) at " + std::to_string(current_baud_) +
@@ -153,7 +153,7 @@ bool Session::switchBaud(int baud) {
   }
   current_baud_ = baud;
   decoder_.reset();
-  std::this_thread::sleep_for(milliseconds(20));
+  pause_(milliseconds(20));
   return true;
 }
 
@@ -196,6 +196,12 @@ bool Session::setUnits() {
     return fail("writing configuration (units): " + error_);
   }
   if (reply.data.empty() || reply.data[0] != 1) return fail("sensor refused the configuration");
+  // The reply echoes the configuration the sensor now holds (older
+  // firmware may send the acceptance byte alone).
+  if (reply.data.size() > kConfigSize && reply.data[1 + kConfigUnitsIndex] != wanted) {
+    return fail("sensor accepted the configuration but reports units byte " +
+                hexByte(reply.data[1 + kConfigUnitsIndex]) + ", expected " + hexByte(wanted));
+  }
   return true;
 }
 
@@ -221,7 +227,9 @@ bool Session::initialize() {
   }
   if (!setVariant()) return false;
   if (!setUnits()) return false;
-  return setMode(mode::kContinuousAll, {}, "starting continuous output");
+  if (!setMode(mode::kContinuousAll, {}, "starting continuous output")) return false;
+  error_.clear();  // a rate that did not answer while probing is no error now
+  return true;
 }
 
 bool Session::stopStreaming() {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "serial_io/byte_stream.h"
@@ -63,6 +64,11 @@ class Session {
   const std::string& error() const { return error_; }
   uint64_t naks() const { return naks_; }
 
+  // Replaces the settling pauses (after a NAK, after a baud change), which
+  // are std::this_thread::sleep_for by default. For a fuzzer that feeds
+  // replies from memory and must not spend wall time.
+  void setPause(std::function<void(std::chrono::milliseconds)> pause) { pause_ = std::move(pause); }
+
  private:
   bool probeBaud();
   bool switchBaud(int baud);
@@ -81,6 +87,9 @@ class Session {
   uint8_t sensor_status_ = 0;
   std::string error_;
   uint64_t naks_ = 0;
+  std::function<void(std::chrono::milliseconds)> pause_ = [](std::chrono::milliseconds wait) {
+    std::this_thread::sleep_for(wait);
+  };
 };
 
 }  // namespace sick_lms200

@@ -155,8 +155,12 @@ TEST(Session, AcknowledgesEveryRequestWithin60MsAndAnswersSlowWritesLater) {
   EXPECT_GE(ack, 0.0);
   EXPECT_LE(ack, 0.060) << "write configuration: the ACK must not wait for the EEPROM";
   EXPECT_GE(reply, 0.45) << "the reply comes once the configuration is written";
-  ASSERT_FALSE(answer.data.empty());
+  // 0xF7 as the LMS2xx telegram listing gives it: accepted (1), the
+  // configuration the sensor now holds, the status byte.
+  ASSERT_EQ(answer.data.size(), 1 + kConfigSize + 1);
   EXPECT_EQ(answer.data[0], 1) << "write accepted";
+  EXPECT_EQ(std::vector<uint8_t>(answer.data.begin() + 1, answer.data.begin() + 1 + kConfigSize),
+            config);
 }
 
 TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
