@@ -69,7 +69,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
       config_(config),
       node_(node),
       private_node_(private_node),
-      tf_listener_(tf_buffer_),
+      tf_listener_(tf_buffer_, params.max_future_stamp),
       diagnostics_(node, private_node) {
   for (DropReason reason : kAllReasons) drops_[reason] = 0;
   localize_only_ = params_.localize_only;
@@ -599,6 +599,8 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   for (const auto& [reason, count] : drops_) {
     status.add(std::string("dropped: ") + toString(reason), count);
   }
+  status.add("dropped tf: stamp in the future", tf_listener_.refusedFuture());
+  status.add("dropped tf: invalid", tf_listener_.refusedInvalid());
   status.add("rejected by filter: time not increasing", counters.time_not_increasing);
   status.add("rejected by filter: odometry jump", counters.odometry_jumps);
   status.add("rejected by filter: bad input", counters.bad_input);

@@ -2,7 +2,8 @@
 // (the same object the offline runner uses, so a bag gives the same answer
 // live and offline).
 //
-// Data flow per scan (all callbacks on one thread, ros::spin):
+// Data flow per scan (all callbacks on one thread, ros::spin; tf arrives
+// through GuardedTfListener's thread, which refuses future stamps):
 //   scan → checks (stamp after the last one, enough valid readings, geometry)
 //        → queue until tf odom→base_link and base_link→laser exist at the
 //          scan's stamp: a transform never received, or base_link→laser
@@ -32,7 +33,6 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <deque>
 #include <map>
@@ -44,6 +44,7 @@
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 #include "ekf_slam_ros/offline/slam_config.h"
+#include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
 #include "ekf_slam_ros/slam_node/live_map.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 
@@ -117,7 +118,7 @@ class SlamNode {
   ros::NodeHandle private_node_;
 
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  GuardedTfListener tf_listener_;  // refuses future-stamped and invalid transforms
   tf2_ros::TransformBroadcaster tf_broadcaster_;
 
   ros::Subscriber input_subscriber_;

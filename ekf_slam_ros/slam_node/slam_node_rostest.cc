@@ -73,6 +73,10 @@ class Robot {
     edit(&scan.ranges);
     scans_.publish(scan);
   }
+  // Publishes one odom → base_link stamped `stamp` (the trajectory's pose then).
+  void publishOdometry(const ros::Time& stamp) {
+    tf_.sendTransform(transform(stamp, "odom", "base_link", poseAt((stamp - start_).toSec())));
+  }
   ros::Time lastGoodStamp() {
     std::lock_guard<std::mutex> lock(mutex_);
     return last_good_stamp_;
@@ -411,6 +415,27 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
   EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations_before; }, 5.0));
   EXPECT_GT(observer_.maps(), maps_before);
+}
+
+// One odom → base_link stamped 10⁶ s ahead among the normal ones. tf2's
+// buffer would keep it as the newest transform and refuse every later one as
+// old data, losing the odometry for 11 days; the node's listener refuses it
+// instead, counts it, and mapping goes on with the next scan.
+TEST_F(SlamNodeTest, AFutureOdometryTransformIsRefusedAndMappingContinues) {
+  ASSERT_TRUE(freshDiagnostics());
+  const double future_before = observer_.diagnostic("dropped tf: stamp in the future");
+  const double missing_before = observer_.diagnostic("dropped: odom transform missing");
+  ASSERT_FALSE(std::isnan(future_before));
+  robot_.publishOdometry(ros::Time::now() + ros::Duration(1.0e6));
+  ros::WallDuration(0.2).sleep();
+  const ros::Time after = ros::Time::now();
+  EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > after; }, 2.0))
+      << "no pose for a scan after the future transform: the odometry was lost";
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_GE(observer_.diagnostic("dropped tf: stamp in the future"), future_before + 1);
+  EXPECT_LE(observer_.diagnostic("dropped: odom transform missing"), missing_before + 1);
+  EXPECT_TRUE(observer_.logged("tf stamp in the future", "odom -> base_link"))
+      << "the log must name the frames";
 }
 
 TEST_F(SlamNodeTest, OutputsCarryTheScansStampsAndFrames) {

@@ -1,0 +1,74 @@
+#include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace ekf_slam {
+
+GuardedTfListener::GuardedTfListener(tf2_ros::Buffer& buffer, double max_future)
+    : buffer_(buffer), max_future_(max_future) {
+  node_.setCallbackQueue(&queue_);
+  tf_subscriber_ = node_.subscribe<tf2_msgs::TFMessage>(
+      "/tf", 100, [this](const tf2_msgs::TFMessage::ConstPtr& m) { onMessage(m, false); },
+      ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+  static_subscriber_ = node_.subscribe<tf2_msgs::TFMessage>(
+      "/tf_static", 100, [this](const tf2_msgs::TFMessage::ConstPtr& m) { onMessage(m, true); });
+  thread_ = std::thread([this] {
+    while (running_ && node_.ok()) queue_.callAvailable(ros::WallDuration(0.01));
+  });
+}
+
+GuardedTfListener::~GuardedTfListener() {
+  running_ = false;
+  if (thread_.joinable()) thread_.join();
+}
+
+std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, const ros::Time& now,
+                                     double max_future, bool is_static) {
+  const auto& p = t.transform.translation;
+  const auto& q = t.transform.rotation;
+  std::ostringstream why;
+  why.setf(std::ios::fixed);
+  why.precision(3);
+  const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+                      std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
+                      std::isfinite(q.w);
+  const double norm2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+  if (!finite || std::abs(norm2 - 1.0) > 1e-3) {
+    why << t.header.frame_id << " -> " << t.child_frame_id << " at " << t.header.stamp.toSec()
+        << ": " << (finite ? "rotation is not a unit quaternion" : "non-finite value");
+    return why.str();
+  }
+  if (!is_static && !now.isZero() && (t.header.stamp - now).toSec() > max_future) {
+    why << t.header.frame_id << " -> " << t.child_frame_id << " stamped " << t.header.stamp.toSec()
+        << ", " << (t.header.stamp - now).toSec() << " s ahead of the clock " << now.toSec()
+        << " (max_future_stamp " << max_future << " s)";
+    return why.str();
+  }
+  return "";
+}
+
+void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, bool is_static) {
+  const ros::Time now = ros::Time::now();
+  const std::string authority = "guarded listener";
+  for (const geometry_msgs::TransformStamped& transform : message->transforms) {
+    const std::string problem = check(transform, now, max_future_, is_static);
+    if (problem.empty()) {
+      try {
+        buffer_.setTransform(transform, authority, is_static);
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN_THROTTLE(5.0, "ekf_slam_node: tf refused a transform: %s", e.what());
+      }
+      continue;
+    }
+    const bool future = problem.find("ahead of the clock") != std::string::npos;
+    (future ? refused_future_ : refused_invalid_)++;
+    ROS_WARN_THROTTLE(1.0,
+                      "ekf_slam_node: dropped a transform (%s): %s; the buffer keeps the "
+                      "transforms before it (%ld future, %ld invalid dropped so far)",
+                      future ? "tf stamp in the future" : "invalid tf", problem.c_str(),
+                      refused_future_.load(), refused_invalid_.load());
+  }
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,59 @@
+// A tf listener that refuses transforms the buffer must never hold.
+//
+// tf2's buffer keeps, per frame pair, the transforms of the last cache_time
+// seconds before the NEWEST one it was given, and refuses anything older. A
+// single odom → base_link stamped 10⁶ s ahead (a driver's clock jump, a
+// corrupt header) therefore makes every later, correct transform "old
+// data": the odometry is lost for 11 days. This listener is
+// tf2_ros::TransformListener with a gate in front of the buffer: a
+// transform on /tf stamped more than `max_future` seconds ahead of the
+// node's clock (ros::Time::now(), sim time included), or with a
+// non-finite or non-unit rotation, is refused, counted and logged
+// (throttled) with its frames and stamp. /tf_static is time-independent and
+// passes the finite-value check only.
+#pragma once
+
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
+#include <tf2_ros/buffer.h>
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <thread>
+
+namespace ekf_slam {
+
+class GuardedTfListener {
+ public:
+  // Subscribes to /tf and /tf_static and fills `buffer` from its own
+  // thread, as tf2_ros::TransformListener does.
+  GuardedTfListener(tf2_ros::Buffer& buffer, double max_future);
+  ~GuardedTfListener();
+  GuardedTfListener(const GuardedTfListener&) = delete;
+  GuardedTfListener& operator=(const GuardedTfListener&) = delete;
+
+  long refusedFuture() const { return refused_future_; }
+  long refusedInvalid() const { return refused_invalid_; }
+
+  // Empty when the transform may enter a buffer at clock time `now`, else
+  // why not (names the frames and the stamp). `now` zero: no clock yet,
+  // the future check is skipped.
+  static std::string check(const geometry_msgs::TransformStamped& transform, const ros::Time& now,
+                           double max_future, bool is_static);
+
+ private:
+  void onMessage(const tf2_msgs::TFMessage::ConstPtr& message, bool is_static);
+
+  tf2_ros::Buffer& buffer_;
+  const double max_future_;
+  ros::NodeHandle node_;
+  ros::CallbackQueue queue_;
+  ros::Subscriber tf_subscriber_, static_subscriber_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+  std::atomic<long> refused_future_{0}, refused_invalid_{0};
+};
+
+}  // namespace ekf_slam
