@@ -1,6 +1,7 @@
 #include "ekf_slam_core/filter/ekf_slam.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cassert>
@@ -39,6 +40,8 @@ const char* toString(FilterStatus status) {
       return "new landmarks disabled (localisation only)";
     case FilterStatus::kDuplicateLandmark:
       return "a landmark with this id exists";
+    case FilterStatus::kUnrepresentablePrior:
+      return "prior covariance beyond what the filter can represent";
   }
   return "unknown status";
 }
@@ -308,6 +311,15 @@ FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2
                                   int observations) {
   if (!position.allFinite() || !covariance.allFinite()) return FilterStatus::kNonFiniteInput;
   if (!isValidCovariance2(covariance)) return FilterStatus::kSingularInnovation;
+  // An update against a variance of 1e300 m² cancels catastrophically (P
+  // minus a gain term equal to it up to rounding) and leaves P indefinite;
+  // a nearly singular one does the same in one direction.
+  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(0.5 * (covariance + covariance.transpose()),
+                                                     Eigen::EigenvaluesOnly);
+  if (eigen.eigenvalues()(1) > kMaxPriorVariance ||
+      eigen.eigenvalues()(0) < kMinPriorEigenvalueRatio * eigen.eigenvalues()(1)) {
+    return FilterStatus::kUnrepresentablePrior;
+  }
   if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
   const int n = dim_;
   reserve(n + kLandmarkDim);

@@ -130,7 +130,12 @@ class EkfSlam {
   // covariance in the map frame, uncorrelated with the pose and the other
   // landmarks. Keeps `id` (later landmarks get larger ids). Refused with
   // kDuplicateLandmark when the id exists, kSingularInnovation when the
-  // covariance is not symmetric positive definite.
+  // covariance is not symmetric positive definite, kUnrepresentablePrior
+  // when its larger eigenvalue exceeds kMaxPriorVariance or its smaller one
+  // is below kMinPriorEigenvalueRatio times the larger (updates would then
+  // lose positive definiteness to rounding).
+  static constexpr double kMaxPriorVariance = 1e6;  // m² (σ = 1 km)
+  static constexpr double kMinPriorEigenvalueRatio = 1e-12;
   FilterStatus addLandmark(int id, const Vector2& position, const Matrix2& covariance,
                            int observations = 2);
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <unistd.h>
+#include <Eigen/Eigenvalues>
 
 #include <csignal>
 #include <cstdio>
@@ -245,6 +246,60 @@ TEST(SeedingTheFilter, LoadedLandmarksKeepIdsMeansCovariancesAndAreUncorrelated)
   int id = -1;
   ASSERT_EQ(filter.augment(z, &id), FilterStatus::kOk);
   EXPECT_GT(id, map.landmarks.back().id);
+}
+
+// A prior the filter cannot carry through its updates is refused; one at
+// the bound stays positive definite, and so savable and loadable, through
+// many updates (a 1e300 m² prior once left P indefinite after 20 scans and
+// the node saved a map it then refused to load).
+TEST(SeedingTheFilter, RefusesAPriorItCannotRepresentAndKeepsOneAtTheBoundDefinite) {
+  FilterOptions options;
+  EkfSlam filter(options, Pose2(), Matrix3::Identity() * 1e-4);
+  EXPECT_EQ(filter.addLandmark(1, Vector2(3, 0), Matrix2::Identity() * 1e300),
+            FilterStatus::kUnrepresentablePrior);
+  Matrix2 thin;
+  thin << 1.0, 0.0, 0.0, 1e-14;
+  EXPECT_EQ(filter.addLandmark(1, Vector2(3, 0), thin), FilterStatus::kUnrepresentablePrior);
+  EXPECT_EQ(filter.stateDim(), EkfSlam::kPoseDim);
+  ASSERT_EQ(
+      filter.addLandmark(1, Vector2(3, 0.5), Matrix2::Identity() * EkfSlam::kMaxPriorVariance),
+      FilterStatus::kOk);
+  ASSERT_EQ(filter.addLandmark(2, Vector2(2, -1), Matrix2::Identity() * 1e-4), FilterStatus::kOk);
+  Pose2 odometry;
+  for (int k = 0; k < 50; ++k) {
+    const Pose2 next = compose(odometry, Pose2(0.02, 0.0, 0.01));
+    ASSERT_EQ(filter.predict(odometry, next, 0.2), FilterStatus::kOk);
+    odometry = next;
+    std::vector<PointObservation> z;
+    for (int slot = 0; slot < 2; ++slot) {
+      EkfSlam::Prediction p;
+      ASSERT_TRUE(filter.predictObservation(slot, &p));
+      PointObservation obs;
+      obs.z = p.z;
+      obs.covariance = Matrix2::Identity() * 1e-4;
+      z.push_back(obs);
+    }
+    ASSERT_EQ(filter.update(z, {{0, 1}, {1, 2}}), FilterStatus::kOk) << "step " << k;
+    const Eigen::MatrixXd P = filter.covariance();
+    const double lowest =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P, Eigen::EigenvaluesOnly).eigenvalues()(0);
+    ASSERT_GT(lowest, -1e-12 * P.diagonal().maxCoeff()) << "step " << k;
+    for (int slot = 0; slot < 2; ++slot) {
+      const Matrix2 c = filter.landmarkCovariance(slot);
+      ASSERT_TRUE(c(0, 0) > 0 && c(1, 1) > 0 && c.determinant() > 0) << "step " << k;
+    }
+  }
+  // And the map it would save loads again.
+  LandmarkMapFile saved;
+  for (int slot = 0; slot < 2; ++slot) {
+    LandmarkRecord r;
+    r.id = filter.landmarks()[slot].id;
+    r.position = filter.landmarkPosition(slot);
+    r.covariance = filter.landmarkCovariance(slot);
+    saved.landmarks.push_back(r);
+  }
+  LandmarkMapFile loaded;
+  EXPECT_EQ(parseLandmarkMap(formatLandmarkMap(saved), "saved", &loaded), "");
 }
 
 TEST(SeedingTheFilter, LocalisationOnlyRefusesNewLandmarks) {
