@@ -77,11 +77,15 @@ std::vector<Vector2> thinned(const std::vector<Vector2>& points, double spacing)
 std::vector<Vector2> gridThinned(const std::vector<Vector2>& points, double spacing) {
   if (!(spacing > 0.0)) return points;
   std::vector<Vector2> out;
-  std::unordered_set<long long> seen;
+  std::unordered_set<unsigned long long> seen;
   for (const Vector2& p : points) {
-    const long long ix = static_cast<long long>(std::floor(p.x() / spacing));
-    const long long iy = static_cast<long long>(std::floor(p.y() / spacing));
-    if (seen.insert((ix << 32) ^ (iy & 0xffffffffLL)).second) out.push_back(p);
+    // Cell indices packed into one key (shifted as unsigned: shifting a
+    // negative signed value is undefined).
+    const auto ix =
+        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.x() / spacing)));
+    const auto iy =
+        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.y() / spacing)));
+    if (seen.insert((ix << 32) ^ (iy & 0xffffffffULL)).second) out.push_back(p);
   }
   return out;
 }

@@ -64,6 +64,14 @@ MotionNoiseOptions PipelineOptions::defaultScanMatchedMotionNoise() {
 }
 
 namespace {
+// An odometry pose the pipeline can use: finite and within
+// kMaxOdometryCoordinate of the odometry origin (a corrupt sample of 1e300 m
+// would carry the scan matcher's grids past what an index can hold).
+bool usableOdometry(const Pose2& odometry) {
+  return odometry.allFinite() && std::abs(odometry.x) <= kMaxOdometryCoordinate &&
+         std::abs(odometry.y) <= kMaxOdometryCoordinate;
+}
+
 FilterOptions filterOptionsFor(const PipelineOptions& options) {
   FilterOptions filter = options.filter;
   if (options.scan_matching.enabled) filter.motion_noise = options.scan_matched_motion_noise;
@@ -165,8 +173,8 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   } else {
     input_error = validateFeatureSet(*features);
   }
-  usable = odometry.allFinite() && input_error.empty() && std::isfinite(stamp);
-  if (scan_matcher_ && odometry.allFinite()) {
+  usable = usableOdometry(odometry) && input_error.empty() && std::isfinite(stamp);
+  if (scan_matcher_ && usableOdometry(odometry)) {
     if (usable) {
       // The filter's jump rule on the raw increment, before it becomes the
       // match's guess: a corrupt sample must not carry the front end (and
@@ -191,10 +199,10 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   if (!usable) {
     ++counters_.bad_input;
     out.outcome = ScanOutcome::kRejectedBadInput;
-    out.message = !odometry.allFinite()  ? "odometry pose is not finite"
-                  : !input_error.empty() ? input_error
-                                         : "scan stamp is not finite";
-    if (!odometry.allFinite()) {
+    out.message = !usableOdometry(odometry) ? "odometry pose is not finite or beyond 1e6 m"
+                  : !input_error.empty()    ? input_error
+                                            : "scan stamp is not finite";
+    if (!usableOdometry(odometry)) {
       out.pose = filter_.pose();
       out.pose_covariance = filter_.poseCovariance();
       out.causal_pose = out.pose;

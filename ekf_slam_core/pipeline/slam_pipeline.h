@@ -18,6 +18,8 @@
 //   discarded (the odometry is re-anchored), no iteration.
 // - A scan whose geometry is unusable (or features with non-finite values):
 //   no iteration, pose dead-reckoned.
+// - An odometry pose that is not finite or lies beyond kMaxOdometryCoordinate
+//   from the odometry origin: no iteration, counted as bad input.
 #pragma once
 
 #include <memory>
@@ -34,6 +36,8 @@
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
 namespace ekf_slam {
+
+constexpr double kMaxOdometryCoordinate = 1e6;  // m: no robot drives 1,000 km from its origin
 
 struct PipelineOptions {
   FeatureOptions features;

@@ -99,7 +99,10 @@ PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, dou
 }
 
 PointCloudReference::CellKey PointCloudReference::key(int ix, int iy) const {
-  return (static_cast<CellKey>(ix) << 32) ^ static_cast<CellKey>(static_cast<uint32_t>(iy));
+  // The same bits as ix · 2³² + iy mod 2⁶⁴, shifted as unsigned: shifting a
+  // negative signed value is undefined.
+  const uint64_t high = static_cast<uint64_t>(static_cast<uint32_t>(ix)) << 32;
+  return static_cast<CellKey>(high | static_cast<uint32_t>(iy));
 }
 
 void PointCloudReference::cellOf(const Vector2& p, int* ix, int* iy) const {
