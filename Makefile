@@ -10,6 +10,12 @@ ROOT  := $(CURDIR)
 CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/ekf_slam/$(shell printf %s '$(ROOT)' | md5sum | cut -c1-12)
 WS    ?= $(CACHE)/ws
 BENCH_WS ?= $(CACHE)/bench_ws
+FUZZ_WS ?= $(CACHE)/fuzz_ws
+SAN_WS ?= $(CACHE)/sanitize_ws
+FUZZ_SECONDS ?= 60
+FUZZ_RUNS ?=
+FUZZ_TARGETS ?=
+export FUZZ_TARGETS
 JOBS  ?= 2
 OUT   ?= $(ROOT)/output
 RVIZ  ?= 0
@@ -19,7 +25,7 @@ RVIZ  ?= 0
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench benchmark format check clean
+.PHONY: all deps workspace build test demo bench benchmark fuzz sanitize format check clean
 
 all: build
 
@@ -66,6 +72,28 @@ benchmark: deps
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
 	@tools/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
+
+# libFuzzer campaign: every fuzz target (or those in FUZZ_TARGETS),
+# FUZZ_SECONDS each (FUZZ_RUNS inputs at most when set), clang with ASan +
+# UBSan over everything linked. Corpus, reproducers and summary.md in
+# output/fuzz/. The README's figures: make fuzz FUZZ_SECONDS=7200 FUZZ_RUNS=10000000
+fuzz:
+	@tools/install_deps.sh clang
+	@mkdir -p $(FUZZ_WS)/src $(OUT)/fuzz
+	@if [ ! -e $(FUZZ_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(FUZZ_WS)/src/ekf_slam; fi
+	@cd $(FUZZ_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+	  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DEKF_SLAM_FUZZ=ON \
+	  -DCATKIN_ENABLE_TESTING=OFF ekf_slam_fuzzers > $(FUZZ_WS)/build.log 2>&1 \
+	  || { tail -n 60 $(FUZZ_WS)/build.log; exit 1; }
+	@tools/run_fuzzers.sh $(FUZZ_WS)/devel/lib/ekf_slam/fuzz $(OUT)/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS)
+
+# Every gtest under AddressSanitizer + UBSan (any report fails the test).
+sanitize: deps
+	@mkdir -p $(SAN_WS)/src
+	@if [ ! -e $(SAN_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(SAN_WS)/src/ekf_slam; fi
+	@cd $(SAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DEKF_SLAM_SANITIZE=ON tests \
+	  > $(SAN_WS)/build.log 2>&1 || { tail -n 60 $(SAN_WS)/build.log; exit 1; }
+	@tools/run_sanitized_tests.sh $(SAN_WS) $(OUT)/sanitize
 
 format:
 	@tools/check_format.sh --fix

@@ -38,3 +38,27 @@ function(ekf_slam_add_rostest file)
     add_rostest(${file} DEPENDENCIES ${ARG_DEPENDENCIES})
   endif()
 endfunction()
+
+# ekf_slam_add_fuzzer(<name> SOURCES <files...> LIBS <targets...> CORPUS <dir>)
+# A libFuzzer target, built only with -DEKF_SLAM_FUZZ=ON (`make fuzz`); the
+# libraries it links are instrumented by the same option. Every fuzzer is a
+# dependency of the target `ekf_slam_fuzzers`, and its seed corpus (a folder
+# of the source tree) is listed in devel/lib/ekf_slam/fuzz/fuzzers.txt, one
+# "<name> <corpus>" line each, for tools/run_fuzzers.sh.
+function(ekf_slam_add_fuzzer name)
+  cmake_parse_arguments(ARG "" "CORPUS" "SOURCES;LIBS" ${ARGN})
+  if(NOT EKF_SLAM_FUZZ)
+    return()
+  endif()
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} ${ARG_LIBS})
+  target_link_options(${name} PRIVATE -fsanitize=fuzzer)
+  set(fuzz_dir ${CATKIN_DEVEL_PREFIX}/lib/${PROJECT_NAME}/fuzz)
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${fuzz_dir})
+  if(NOT TARGET ekf_slam_fuzzers)
+    add_custom_target(ekf_slam_fuzzers)
+    file(WRITE ${fuzz_dir}/fuzzers.txt "")
+  endif()
+  add_dependencies(ekf_slam_fuzzers ${name})
+  file(APPEND ${fuzz_dir}/fuzzers.txt "${name} ${ARG_CORPUS}\n")
+endfunction()

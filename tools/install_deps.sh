@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages this project needs, only when one is missing.
 # Idempotent and silent when everything is present. Needs root (or sudo).
+# Extra packages a target needs (clang for `make fuzz`) come as arguments.
 set -euo pipefail
 
 PACKAGES=(
@@ -22,6 +23,7 @@ PACKAGES=(
   python3-matplotlib python3-numpy python3-yaml
   # rviz (sim.launch rviz:=true) and its headless smoke test / screenshot
   rviz xvfb x11-apps
+  "$@"
 )
 
 missing=()
