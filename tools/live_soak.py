@@ -1,0 +1,141 @@
+#!/usr/bin/python3
+"""Live soak: the simulator drives the office loop, lap after lap, with the
+whole stack running (emulated P3-DX and LMS200 on pseudo-terminals, the
+drivers, ekf_slam_node), and the node's memory and CPU are logged once a
+second.
+
+Starts its own roscore (port --port), `sim.launch waypoints:=office_loop
+laps:=1000`, finds the ekf_slam_node process and samples /proc/<pid>: the
+resident set (VmRSS) and the CPU time (utime + stime) of the last second.
+It also records the node's landmark count and path length from
+/diagnostics, so that memory can be set against what the map explains.
+
+Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed)
+and prints a summary: RSS after the warm-up and at the end.
+
+usage (after make build, with the workspace sourced):
+  source .build/setup.bash
+  tools/live_soak.py --minutes 30 --out output/soak
+"""
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray
+
+
+def find_node(name, deadline):
+    while time.monotonic() < deadline:
+        for pid in os.listdir("/proc"):
+            if not pid.isdigit():
+                continue
+            try:
+                with open("/proc/%s/cmdline" % pid, "rb") as f:
+                    argv = f.read().split(b"\0")
+            except OSError:
+                continue
+            if argv and os.path.basename(argv[0].decode(errors="replace")) == name:
+                return int(pid)
+        time.sleep(0.5)
+    return None
+
+
+def sample(pid):
+    """(rss KiB, cpu seconds) of process pid, or None when it is gone."""
+    try:
+        with open("/proc/%d/status" % pid) as f:
+            rss = next(int(line.split()[1]) for line in f if line.startswith("VmRSS:"))
+        with open("/proc/%d/stat" % pid) as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        ticks = os.sysconf("SC_CLK_TCK")
+        return rss, (int(fields[11]) + int(fields[12])) / ticks
+    except (OSError, StopIteration, ValueError):
+        return None
+
+
+class Diagnostics:
+    def __init__(self):
+        self.values = {}
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_message, queue_size=10)
+
+    def on_message(self, msg):
+        for status in msg.status:
+            if "EKF-SLAM" in status.name:
+                self.values = {kv.key: kv.value for kv in status.values}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--minutes", type=float, default=30.0)
+    parser.add_argument("--warmup-minutes", type=float, default=5.0)
+    parser.add_argument("--out", default="output/soak")
+    parser.add_argument("--port", type=int, default=11473)
+    args = parser.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    env = dict(os.environ, ROS_MASTER_URI="http://localhost:%d" % args.port)
+    os.environ.update(env)
+    log = open(os.path.join(args.out, "live_soak_roslaunch.log"), "w")
+    procs = [subprocess.Popen(["roscore", "-p", str(args.port)], env=env, stdout=log,
+                              stderr=subprocess.STDOUT, start_new_session=True)]
+    try:
+        time.sleep(3.0)
+        procs.append(subprocess.Popen(
+            ["roslaunch", "ekf_slam", "sim.launch", "waypoints:=office_loop", "laps:=1000",
+             "link_dir:=/tmp/ekf_slam_soak"],
+            env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+        pid = find_node("ekf_slam_node", time.monotonic() + 60.0)
+        if pid is None:
+            print("live_soak: ekf_slam_node did not start (see %s)" % log.name, file=sys.stderr)
+            return 2
+        rospy.init_node("live_soak", anonymous=True, disable_signals=True)
+        diagnostics = Diagnostics()
+        path = os.path.join(args.out, "live_soak.txt")
+        rows = []
+        with open(path, "w") as out:
+            out.write("# t_s rss_kib cpu_percent landmarks scans_processed\n")
+            start = time.monotonic()
+            last = sample(pid)
+            last_t = start
+            while time.monotonic() - start < args.minutes * 60.0:
+                time.sleep(1.0)
+                now = time.monotonic()
+                current = sample(pid)
+                if current is None:
+                    print("live_soak: ekf_slam_node exited after %.0f s" % (now - start),
+                          file=sys.stderr)
+                    return 1
+                cpu = 100.0 * (current[1] - last[1]) / (now - last_t)
+                last, last_t = current, now
+                values = diagnostics.values
+                row = (now - start, current[0], cpu, int(values.get("landmarks", "0") or 0),
+                       int(values.get("scans processed", "0") or 0))
+                rows.append(row)
+                out.write("%.1f %d %.1f %d %d\n" % row)
+                out.flush()
+        warm = [r for r in rows if r[0] >= args.warmup_minutes * 60.0]
+        if not warm:
+            print("live_soak: shorter than the warm-up; nothing to compare", file=sys.stderr)
+            return 1
+        cpu_mean = sum(r[2] for r in rows) / len(rows)
+        print("live soak: %.1f min, %d scans processed, %d landmarks at the end" %
+              (rows[-1][0] / 60.0, rows[-1][4], rows[-1][3]))
+        print("RSS %d KiB after the %.0f min warm-up, %d KiB at the end (max %d KiB); "
+              "CPU %.1f %% mean" % (warm[0][1], args.warmup_minutes, rows[-1][1],
+                                     max(r[1] for r in warm), cpu_mean))
+        print("samples: %s" % path)
+        return 0
+    finally:
+        for p in reversed(procs):
+            try:
+                os.killpg(p.pid, signal.SIGINT)
+                p.wait(timeout=20)
+            except (OSError, subprocess.TimeoutExpired):
+                os.killpg(p.pid, signal.SIGKILL)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
