@@ -6,9 +6,11 @@
 set -u
 ws=${1:?usage: run_sanitized_tests.sh WS OUT_DIR}
 out=${2:?usage: run_sanitized_tests.sh WS OUT_DIR}
-mkdir -p "$out"
+mkdir -p "$out" && out=$(cd "$out" && pwd)
+set +u  # ROS's setup scripts read unset variables
 # shellcheck disable=SC1091
 source "$ws/devel/setup.bash"
+set -u
 export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 # The gtests catkin registered (rostests need a roscore and are left out).

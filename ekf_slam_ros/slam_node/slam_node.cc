@@ -345,6 +345,25 @@ void SlamNode::drainQueue() {
   }
 }
 
+SlamNode::StoredScan::StoredScan(const Scan& scan)
+    : ranges(scan.ranges.begin(), scan.ranges.end()),
+      angle_min(scan.angle_min),
+      angle_increment(scan.angle_increment),
+      range_min(scan.range_min),
+      range_max(scan.range_max),
+      stamp(scan.stamp) {}
+
+Scan SlamNode::StoredScan::toScan() const {
+  Scan scan;
+  scan.ranges.assign(ranges.begin(), ranges.end());
+  scan.angle_min = angle_min;
+  scan.angle_increment = angle_increment;
+  scan.range_min = range_min;
+  scan.range_max = range_max;
+  scan.stamp = stamp;
+  return scan;
+}
+
 void SlamNode::createPipeline(const Pose2& laser_pose) {
   config_.pipeline.filter.laser_pose = laser_pose;
   laser_pose_ = laser_pose;
@@ -387,7 +406,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
                                          : pipeline_->processFeatures(pending.header.stamp.toSec(),
                                                                       *pending.features, odometry);
   if (pending.scan && pipeline_->scans().size() > records_before) {
-    stored_scans_.push_back(*pending.scan);
+    stored_scans_.emplace_back(*pending.scan);
   }
   if (!result.message.empty()) {
     ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f %s: %s", pending.header.stamp.toSec(),
@@ -769,7 +788,7 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     p.pose = toPoseMessage(smoothed[i].pose);
     path.poses.push_back(p);
     if (i < stored_scans_.size()) {
-      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[i]);
+      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[i].toScan());
     }
   }
   smoothed_path_publisher_.publish(path);

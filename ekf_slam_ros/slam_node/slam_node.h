@@ -142,7 +142,16 @@ class SlamNode {
   bool paused_ = false;
   std::deque<PendingInput> queue_;
   std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
-  std::vector<Scan> stored_scans_;  // one per pipeline record, for the map (input: scan)
+  // One per pipeline record, for the ~smooth grid (input: scan). The ranges
+  // arrive as float32 and are kept so (half the memory of the core's
+  // doubles, and the same values when converted back).
+  struct StoredScan {
+    std::vector<float> ranges;
+    double angle_min = 0.0, angle_increment = 0.0, range_min = 0.0, range_max = 0.0, stamp = 0.0;
+    explicit StoredScan(const Scan& scan);
+    Scan toScan() const;
+  };
+  std::vector<StoredScan> stored_scans_;
   nav_msgs::Path path_;
   // The robot's own odometry drawn in the map frame, tied to the SLAM pose at
   // the first scan: where the robot would believe it is without SLAM.
