@@ -63,15 +63,12 @@ MotionNoiseOptions PipelineOptions::defaultScanMatchedMotionNoise() {
   return noise;
 }
 
-namespace {
-// An odometry pose the pipeline can use: finite and within
-// kMaxOdometryCoordinate of the odometry origin (a corrupt sample of 1e300 m
-// would carry the scan matcher's grids past what an index can hold).
 bool usableOdometry(const Pose2& odometry) {
   return odometry.allFinite() && std::abs(odometry.x) <= kMaxOdometryCoordinate &&
          std::abs(odometry.y) <= kMaxOdometryCoordinate;
 }
 
+namespace {
 FilterOptions filterOptionsFor(const PipelineOptions& options) {
   FilterOptions filter = options.filter;
   if (options.scan_matching.enabled) filter.motion_noise = options.scan_matched_motion_noise;

@@ -39,6 +39,12 @@ namespace ekf_slam {
 
 constexpr double kMaxOdometryCoordinate = 1e6;  // m: no robot drives 1,000 km from its origin
 
+// An odometry pose the pipeline can use: finite and within
+// kMaxOdometryCoordinate of the odometry origin (a corrupt sample of 1e300 m
+// would carry the scan matcher's grids past what an index can hold). A scan
+// whose odometry is not usable gets no ScanRecord.
+bool usableOdometry(const Pose2& odometry);
+
 struct PipelineOptions {
   FeatureOptions features;
   FilterOptions filter;

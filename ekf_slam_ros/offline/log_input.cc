@@ -52,14 +52,16 @@ void finish(LogData* out, const OdometryTrack& track, double max_gap) {
   setStampRange(out);
 }
 
-// Leaves out scans with a non-finite stamp or odometry pose, counted; the
-// stamp range is taken over the rest.
+// Leaves out scans with a non-finite stamp or an odometry pose the pipeline
+// cannot use (usableOdometry: not finite, or beyond 1,000 km), counted; the
+// stamp range is taken over the rest. The pipeline then records every scan
+// it is given, one trajectory line per scan.
 void dropUnusable(LogData* log) {
   std::vector<LoggedScan> kept;
   kept.reserve(log->scans.size());
   for (size_t i = 0; i < log->scans.size(); ++i) {
     LoggedScan& s = log->scans[i];
-    if (std::isfinite(s.scan.stamp) && s.odometry.allFinite()) {
+    if (std::isfinite(s.scan.stamp) && usableOdometry(s.odometry)) {
       kept.push_back(std::move(s));
       continue;
     }

@@ -391,7 +391,8 @@ int main(int argc, char** argv) {
   report << "input: " << (bag_path.empty() ? carmen_path : bag_path) << "\n"
          << "scans: " << total << " (" << log.scans_out_of_time_order
          << " with a stamp not after the previous one)\n"
-         << "scans left out (non-finite stamp or odometry): " << log.unusable_scans
+         << "scans left out (stamp not finite, odometry not finite or beyond 1e6 m): "
+         << log.unusable_scans
          << (log.unusable_scans > 0 ? ", the first " + log.first_unusable : std::string()) << "\n"
          << "data duration: " << log.duration() << " s\n"
          << "odometry samples: " << log.odometry_samples << ", scans with an odometry gap > "
