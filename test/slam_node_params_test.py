@@ -63,6 +63,14 @@ class BadParameters(unittest.TestCase):
         finally:
             os.unlink(path)
 
+    def test_bad_value_under_the_slam_namespace_names_the_yaml_key(self):
+        # The launch files load the configuration file into ~slam; the nodes
+        # read it from there (so rosparam get shows it), checked alike.
+        self.check("ekf_slam_node", "filter.motion_noise.rot_per_rot",
+                   "_slam/filter/motion_noise/rot_per_rot:=-1")
+        self.check("feature_node", "features.split_threshold",
+                   "_slam/features/split_threshold:=-0.5")
+
     def test_unknown_input_mode_names_the_key(self):
         self.check("ekf_slam_node", "input", "_input:=laser")
 

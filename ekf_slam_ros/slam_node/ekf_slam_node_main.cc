@@ -17,14 +17,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   ekf_slam::SlamConfig config;
-  if (!params.config_file.empty()) {
-    error = ekf_slam::loadSlamConfigFile(params.config_file, &config);
-    if (!error.empty()) {
-      ROS_FATAL("ekf_slam_node: bad configuration %s:\n%s", params.config_file.c_str(),
-                error.c_str());
-      return 1;
-    }
+  std::string source;
+  if (!ekf_slam::loadNodeSlamConfig(private_node, params.config_file, &config, &source, &error)) {
+    ROS_FATAL("ekf_slam_node: bad configuration %s:\n%s", source.c_str(), error.c_str());
+    return 1;
   }
+  ROS_INFO("ekf_slam_node: configuration from %s", source.c_str());
   if (params.input == "features" &&
       (config.pipeline.scan_matching.enabled || config.pipeline.loop_closure.enabled)) {
     const char* key =
@@ -32,7 +30,7 @@ int main(int argc, char** argv) {
     ROS_FATAL(
         "ekf_slam_node: input is 'features' but %s is true in %s; it needs the raw scans: set it "
         "false there or use input: scan",
-        key, params.config_file.empty() ? "the built-in defaults" : params.config_file.c_str());
+        key, source.c_str());
     return 1;
   }
   try {

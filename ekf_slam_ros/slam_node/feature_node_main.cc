@@ -1,7 +1,8 @@
 // feature_node: scan → `features` (ekf_slam/Features, stamped and framed as
 // the scan) + `feature_markers` for rviz. The extraction is the core's
-// extractFeatures with the `features:` section of the configuration file, the
-// same code ekf_slam_node runs inside its pipeline.
+// extractFeatures with the `features:` section of the configuration (~slam,
+// or the file config_file), the same code ekf_slam_node runs inside its
+// pipeline.
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 
@@ -54,13 +55,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   ekf_slam::SlamConfig config;
-  if (!params.config_file.empty()) {
-    error = ekf_slam::loadSlamConfigFile(params.config_file, &config);
-    if (!error.empty()) {
-      ROS_FATAL("feature_node: bad configuration %s:\n%s", params.config_file.c_str(),
-                error.c_str());
-      return 1;
-    }
+  std::string source;
+  if (!ekf_slam::loadNodeSlamConfig(private_node, params.config_file, &config, &source, &error)) {
+    ROS_FATAL("feature_node: bad configuration %s:\n%s", source.c_str(), error.c_str());
+    return 1;
   }
   FeatureNode feature_node(node, params, config.pipeline.features);
   ros::spin();

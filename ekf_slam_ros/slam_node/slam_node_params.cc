@@ -1,12 +1,70 @@
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 
+#include <xmlrpcpp/XmlRpcValue.h>
+#include <yaml-cpp/yaml.h>
+
 #include "ros_params/private_params.h"
 
 namespace ekf_slam {
+namespace {
+
+// A parameter-server value as the YAML node the configuration loader reads.
+// Doubles keep every digit (yaml-cpp writes max_digits10), so a file loaded
+// with rosparam gives the loader the numbers the file holds.
+YAML::Node toYaml(XmlRpc::XmlRpcValue& value) {
+  switch (value.getType()) {
+    case XmlRpc::XmlRpcValue::TypeStruct: {
+      YAML::Node map(YAML::NodeType::Map);
+      for (auto& [key, member] : value) map[key] = toYaml(member);
+      return map;
+    }
+    case XmlRpc::XmlRpcValue::TypeArray: {
+      YAML::Node list(YAML::NodeType::Sequence);
+      for (int i = 0; i < value.size(); ++i) list.push_back(toYaml(value[i]));
+      return list;
+    }
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      return YAML::Node(static_cast<bool>(value));
+    case XmlRpc::XmlRpcValue::TypeInt:
+      return YAML::Node(static_cast<int>(value));
+    case XmlRpc::XmlRpcValue::TypeDouble:
+      return YAML::Node(static_cast<double>(value));
+    case XmlRpc::XmlRpcValue::TypeString:
+      return YAML::Node(static_cast<std::string>(value));
+    default:
+      return YAML::Node();  // the loader names the key whose value is missing
+  }
+}
+
+}  // namespace
+
+bool loadNodeSlamConfig(const ros::NodeHandle& private_node, const std::string& config_file,
+                        SlamConfig* config, std::string* source, std::string* error) {
+  XmlRpc::XmlRpcValue tree;
+  if (private_node.getParam("slam", tree)) {
+    *source = private_node.getNamespace() + "/slam" +
+              (config_file.empty() ? std::string() : " (loaded from " + config_file + ")");
+    if (tree.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+      *error = "slam: must be a dictionary of the configuration's sections";
+      return false;
+    }
+    *error = loadSlamConfig(toYaml(tree), config);
+    return error->empty();
+  }
+  if (config_file.empty()) {
+    *source = "the built-in defaults";
+    *error = "";
+    return true;
+  }
+  *source = config_file;
+  *error = loadSlamConfigFile(config_file, config);
+  return error->empty();
+}
 
 bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::string* error) {
   PrivateParams read(node);
   read.text("config_file", &p->config_file, /*required=*/false);
+  read.allow("slam");  // the SLAM configuration (loadNodeSlamConfig)
   read.text("map_frame", &p->map_frame, /*required=*/true);
   read.text("odom_frame", &p->odom_frame, /*required=*/true);
   read.text("base_frame", &p->base_frame, /*required=*/true);
@@ -41,6 +99,7 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
 bool loadFeatureNodeParams(const ros::NodeHandle& node, FeatureNodeParams* p, std::string* error) {
   PrivateParams read(node);
   read.text("config_file", &p->config_file, /*required=*/false);
+  read.allow("slam");  // the SLAM configuration (loadNodeSlamConfig)
   read.text("scan_topic", &p->scan_topic, /*required=*/true);
   read.rejectUnknown();
   *error = read.errors();

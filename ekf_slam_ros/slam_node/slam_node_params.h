@@ -1,14 +1,18 @@
 // Node-level parameters of ekf_slam_node (frames, topics, tf waiting, publish
 // rates): read from the private namespace and validated; an unknown key or a
 // bad value stops the node with the key's name. The filter/feature
-// parameters live in the file named by `config_file` (config/ekf_slam.yaml
-// format) and go through the same loader as ekf_slam_offline.
+// parameters (config/ekf_slam.yaml format) go through the same loader as
+// ekf_slam_offline: from the private namespace `~slam` when present (the
+// launch files load the file there, so `rosparam get` shows every value),
+// else from the file named by `config_file`.
 // Every key, its unit and default: config/ekf_slam_node.yaml.
 #pragma once
 
 #include <ros/node_handle.h>
 
 #include <string>
+
+#include "ekf_slam_ros/offline/slam_config.h"
 
 namespace ekf_slam {
 
@@ -54,4 +58,11 @@ bool loadSlamNodeParams(const ros::NodeHandle& private_node, SlamNodeParams* par
                         std::string* error);
 bool loadFeatureNodeParams(const ros::NodeHandle& private_node, FeatureNodeParams* params,
                            std::string* error);
+
+// The SLAM configuration of a node: from ~slam when that namespace exists,
+// else from params.config_file, else the built-in defaults. `source`
+// receives where it came from (for messages); false with `error` naming the
+// key on a bad value.
+bool loadNodeSlamConfig(const ros::NodeHandle& private_node, const std::string& config_file,
+                        SlamConfig* config, std::string* source, std::string* error);
 }  // namespace ekf_slam
