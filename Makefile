@@ -87,11 +87,12 @@ fuzz:
 	  || { tail -n 60 $(FUZZ_WS)/build.log; exit 1; }
 	@tools/run_fuzzers.sh $(FUZZ_WS)/devel/lib/ekf_slam/fuzz $(OUT)/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS)
 
-# Every gtest under AddressSanitizer + UBSan (any report fails the test).
+# Every gtest under AddressSanitizer + UBSan (any report fails the test),
+# with the executables the gtests run.
 sanitize: deps
 	@mkdir -p $(SAN_WS)/src
 	@if [ ! -e $(SAN_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(SAN_WS)/src/ekf_slam; fi
-	@cd $(SAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DEKF_SLAM_SANITIZE=ON tests \
+	@cd $(SAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DEKF_SLAM_SANITIZE=ON tests ekf_slam_offline \
 	  > $(SAN_WS)/build.log 2>&1 || { tail -n 60 $(SAN_WS)/build.log; exit 1; }
 	@tools/run_sanitized_tests.sh $(SAN_WS) $(OUT)/sanitize
 
