@@ -1,5 +1,6 @@
 #include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -24,7 +25,7 @@ GuardedTfListener::~GuardedTfListener() {
 }
 
 std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, const ros::Time& now,
-                                     double max_future, bool is_static) {
+                                     const ros::Time& last, double max_future, bool is_static) {
   const auto& p = t.transform.translation;
   const auto& q = t.transform.rotation;
   std::ostringstream why;
@@ -39,10 +40,12 @@ std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, c
         << ": " << (finite ? "rotation is not a unit quaternion" : "non-finite value");
     return why.str();
   }
-  if (!is_static && !now.isZero() && (t.header.stamp - now).toSec() > max_future) {
+  const ros::Time reference = std::max(now, last);
+  if (!is_static && !reference.isZero() && (t.header.stamp - reference).toSec() > max_future) {
     why << t.header.frame_id << " -> " << t.child_frame_id << " stamped " << t.header.stamp.toSec()
         << ", " << (t.header.stamp - now).toSec() << " s ahead of the clock " << now.toSec()
-        << " (max_future_stamp " << max_future << " s)";
+        << " and " << (t.header.stamp - last).toSec() << " s after the last accepted one "
+        << "(max_future_stamp " << max_future << " s)";
     return why.str();
   }
   return "";
@@ -52,8 +55,10 @@ void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, 
   const ros::Time now = ros::Time::now();
   const std::string authority = "guarded listener";
   for (const geometry_msgs::TransformStamped& transform : message->transforms) {
-    const std::string problem = check(transform, now, max_future_, is_static);
+    ros::Time& last = last_accepted_[{transform.header.frame_id, transform.child_frame_id}];
+    const std::string problem = check(transform, now, last, max_future_, is_static);
     if (problem.empty()) {
+      if (!is_static) last = std::max(last, transform.header.stamp);
       try {
         buffer_.setTransform(transform, authority, is_static);
       } catch (const tf2::TransformException& e) {

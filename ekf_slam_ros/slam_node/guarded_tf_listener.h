@@ -6,11 +6,16 @@
 // corrupt header) therefore makes every later, correct transform "old
 // data": the odometry is lost for 11 days. This listener is
 // tf2_ros::TransformListener with a gate in front of the buffer: a
-// transform on /tf stamped more than `max_future` seconds ahead of the
-// node's clock (ros::Time::now(), sim time included), or with a
-// non-finite or non-unit rotation, is refused, counted and logged
-// (throttled) with its frames and stamp. /tf_static is time-independent and
-// passes the finite-value check only.
+// transform on /tf stamped more than `max_future` seconds ahead of both the
+// node's clock (ros::Time::now(), sim time included) and the last
+// transform accepted for the same frame pair, or with a non-finite or
+// non-unit rotation, is refused, counted and logged (throttled) with its
+// frames and stamp. The frame pair's own history matters under sim time:
+// the clock advances only when the node's main thread takes its /clock
+// messages, so while a scan is being processed a bag replayed at 10× lets
+// the clock fall a second behind a transform stream that is perfectly
+// continuous. /tf_static is time-independent and passes the finite-value
+// check only.
 #pragma once
 
 #include <ros/callback_queue.h>
@@ -19,9 +24,11 @@
 #include <tf2_ros/buffer.h>
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
+#include <utility>
 
 namespace ekf_slam {
 
@@ -37,11 +44,12 @@ class GuardedTfListener {
   long refusedFuture() const { return refused_future_; }
   long refusedInvalid() const { return refused_invalid_; }
 
-  // Empty when the transform may enter a buffer at clock time `now`, else
-  // why not (names the frames and the stamp). `now` zero: no clock yet,
-  // the future check is skipped.
+  // Empty when the transform may enter a buffer at clock time `now`, when
+  // the last transform accepted for its frame pair was stamped `last` (zero:
+  // none yet), else why not (names the frames and the stamp). The future
+  // check is against the later of the two, and skipped while both are zero.
   static std::string check(const geometry_msgs::TransformStamped& transform, const ros::Time& now,
-                           double max_future, bool is_static);
+                           const ros::Time& last, double max_future, bool is_static);
 
  private:
   void onMessage(const tf2_msgs::TFMessage::ConstPtr& message, bool is_static);
@@ -54,6 +62,8 @@ class GuardedTfListener {
   std::atomic<bool> running_{true};
   std::thread thread_;
   std::atomic<long> refused_future_{0}, refused_invalid_{0};
+  // Newest accepted stamp per (parent, child); used on the listener's thread only.
+  std::map<std::pair<std::string, std::string>, ros::Time> last_accepted_;
 };
 
 }  // namespace ekf_slam
