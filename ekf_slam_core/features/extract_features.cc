@@ -195,25 +195,35 @@ int FeatureSet::countLandmarkCandidates() const {
   return count;
 }
 
+namespace {
+
+// Why a landmark candidate cannot go to the filter, or nullptr.
+const char* unusableCandidate(const PointFeature& point) {
+  const Matrix2& c = point.range_bearing_covariance;
+  if (!(std::isfinite(point.range) && point.range > 0.0)) {
+    return "range is not a positive finite number";
+  }
+  if (!std::isfinite(point.bearing)) return "bearing is not finite";
+  if (!c.allFinite()) return "range-bearing covariance is not finite";
+  if (std::abs(c(0, 1) - c(1, 0)) > 1e-9 * std::max(1e-12, c.diagonal().maxCoeff())) {
+    return "range-bearing covariance is not symmetric";
+  }
+  if (!(c(0, 0) > 0.0 && c(1, 1) > 0.0 && c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0) > 0.0)) {
+    return "range-bearing covariance is not positive definite";
+  }
+  return nullptr;
+}
+
+}  // namespace
+
 std::string validateFeatureSet(const FeatureSet& features) {
   if (!features.error.empty()) return "the extraction failed: " + features.error;
   for (size_t i = 0; i < features.points_of_interest.size(); ++i) {
     const PointFeature& point = features.points_of_interest[i];
     if (!point.landmark_candidate) continue;  // never reaches the filter
-    const Matrix2& c = point.range_bearing_covariance;
-    const char* why = nullptr;
-    if (!(std::isfinite(point.range) && point.range > 0.0)) {
-      why = "range is not a positive finite number";
-    } else if (!std::isfinite(point.bearing)) {
-      why = "bearing is not finite";
-    } else if (!c.allFinite()) {
-      why = "range-bearing covariance is not finite";
-    } else if (std::abs(c(0, 1) - c(1, 0)) > 1e-9 * std::max(1e-12, c.diagonal().maxCoeff())) {
-      why = "range-bearing covariance is not symmetric";
-    } else if (!(c(0, 0) > 0.0 && c(1, 1) > 0.0 && c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0) > 0.0)) {
-      why = "range-bearing covariance is not positive definite";
+    if (const char* why = unusableCandidate(point)) {
+      return "point " + std::to_string(i) + ": " + why;
     }
-    if (why != nullptr) return "point " + std::to_string(i) + ": " + why;
   }
   return "";
 }
@@ -293,6 +303,15 @@ FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options) {
       PointFeature end = segmentEnd(scan, out.points, fitted.back(), /*at_start=*/false,
                                     line_of_piece.back(), options);
       if (finishPoint(options, &end)) out.points_of_interest.push_back(end);
+    }
+  }
+  // A candidate the filter could not use (readings of 10³⁸ m under a
+  // range_max of FLT_MAX give a covariance whose determinant rounds to
+  // zero) stays a point of interest but is no landmark candidate: the
+  // extractor never hands the filter what validateFeatureSet refuses.
+  for (PointFeature& point : out.points_of_interest) {
+    if (point.landmark_candidate && unusableCandidate(point) != nullptr) {
+      point.landmark_candidate = false;
     }
   }
   return out;

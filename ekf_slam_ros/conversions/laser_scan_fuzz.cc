@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 
 #include "ekf_slam_core/features/extract_features.h"
@@ -86,6 +87,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!validateScan(scan).empty()) return 0;
   if (countValidReadings(scan) < 10) return 0;
   const FeatureSet features = extractFeatures(scan, FeatureOptions());
-  assert(validateFeatureSet(features).empty());
+  const std::string invalid = validateFeatureSet(features);
+  if (!invalid.empty()) std::fprintf(stderr, "laser_scan_fuzz: %s\n", invalid.c_str());
+  assert(invalid.empty());
   return 0;
 }
