@@ -15,6 +15,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def plot_pair(ax, x, rss_kib, other, other_label, other_color, title):
+    """RSS (MiB) on the left axis and another series on the right one."""
+    ax.plot(x, rss_kib / 1024.0, color="tab:blue")
+    ax.set_ylim(0, max(rss_kib / 1024.0) * 1.3)
+    twin = ax.twinx()
+    twin.plot(x, other, color=other_color, linewidth=0.8)
+    twin.set_ylabel(other_label, color=other_color)
+    ax.set_title(title)
+    return twin
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--filter")
@@ -29,28 +40,20 @@ def main():
     if args.filter:
         d = np.loadtxt(args.filter, ndmin=2)
         ax = axes[row][0]
-        ax.plot(d[:, 0] / 1e3, d[:, 1] / 1024.0, color="tab:blue")
+        twin = plot_pair(ax, d[:, 0] / 1e3, d[:, 1], d[:, 2], "landmarks", "tab:orange",
+                         "filter on the landmark simulator: lowest eigenvalue of P %.2g"
+                         % d[:, 3].min())
+        twin.set_ylim(0, max(d[:, 2]) * 1.3)
         ax.set_xlabel("filter iteration (thousands)")
         ax.set_ylabel("RSS (MiB)", color="tab:blue")
-        ax.set_ylim(0, max(d[:, 1] / 1024.0) * 1.3)
-        twin = ax.twinx()
-        twin.plot(d[:, 0] / 1e3, d[:, 2], color="tab:orange")
-        twin.set_ylabel("landmarks", color="tab:orange")
-        twin.set_ylim(0, max(d[:, 2]) * 1.3)
-        ax.set_title("filter on the landmark simulator: lowest eigenvalue of P %.2g"
-                     % d[:, 3].min())
         row += 1
     if args.live:
         d = np.loadtxt(args.live, ndmin=2)
         ax = axes[row][0]
-        ax.plot(d[:, 0] / 60.0, d[:, 1] / 1024.0, color="tab:blue")
+        plot_pair(ax, d[:, 0] / 60.0, d[:, 1], d[:, 2], "CPU (%)", "tab:green",
+                  "live node, simulator driving the office loop")
         ax.set_xlabel("minutes")
         ax.set_ylabel("ekf_slam_node RSS (MiB)", color="tab:blue")
-        ax.set_ylim(0, max(d[:, 1] / 1024.0) * 1.3)
-        twin = ax.twinx()
-        twin.plot(d[:, 0] / 60.0, d[:, 2], color="tab:green", alpha=0.5, linewidth=0.7)
-        twin.set_ylabel("CPU (%)", color="tab:green")
-        ax.set_title("live node, simulator driving the office loop")
     fig.tight_layout()
     fig.savefig(args.out, dpi=110)
     print("wrote %s" % args.out)

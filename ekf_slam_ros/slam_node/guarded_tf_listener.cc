@@ -25,7 +25,9 @@ GuardedTfListener::~GuardedTfListener() {
 }
 
 std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, const ros::Time& now,
-                                     const ros::Time& last, double max_future, bool is_static) {
+                                     const ros::Time& last, double max_future, bool is_static,
+                                     bool* future) {
+  if (future != nullptr) *future = false;
   const auto& p = t.transform.translation;
   const auto& q = t.transform.rotation;
   std::ostringstream why;
@@ -46,6 +48,7 @@ std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, c
         << ", " << (t.header.stamp - now).toSec() << " s ahead of the clock " << now.toSec()
         << " and " << (t.header.stamp - last).toSec() << " s after the last accepted one "
         << "(max_future_stamp " << max_future << " s)";
+    if (future != nullptr) *future = true;
     return why.str();
   }
   return "";
@@ -56,7 +59,8 @@ void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, 
   const std::string authority = "guarded listener";
   for (const geometry_msgs::TransformStamped& transform : message->transforms) {
     ros::Time& last = last_accepted_[{transform.header.frame_id, transform.child_frame_id}];
-    const std::string problem = check(transform, now, last, max_future_, is_static);
+    bool future = false;
+    const std::string problem = check(transform, now, last, max_future_, is_static, &future);
     if (problem.empty()) {
       if (!is_static) last = std::max(last, transform.header.stamp);
       try {
@@ -66,7 +70,6 @@ void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, 
       }
       continue;
     }
-    const bool future = problem.find("ahead of the clock") != std::string::npos;
     (future ? refused_future_ : refused_invalid_)++;
     ROS_WARN_THROTTLE(1.0,
                       "ekf_slam_node: dropped a transform (%s): %s; the buffer keeps the "

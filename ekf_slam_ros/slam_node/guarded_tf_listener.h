@@ -48,8 +48,10 @@ class GuardedTfListener {
   // the last transform accepted for its frame pair was stamped `last` (zero:
   // none yet), else why not (names the frames and the stamp). The future
   // check is against the later of the two, and skipped while both are zero.
+  // `future` (if given) says whether a refusal was for the stamp.
   static std::string check(const geometry_msgs::TransformStamped& transform, const ros::Time& now,
-                           const ros::Time& last, double max_future, bool is_static);
+                           const ros::Time& last, double max_future, bool is_static,
+                           bool* future = nullptr);
 
  private:
   void onMessage(const tf2_msgs::TFMessage::ConstPtr& message, bool is_static);
