@@ -2,7 +2,10 @@
 # targets, not a page of boilerplate.
 
 # ekf_slam_add_gtest(<name> SOURCES <files...> LIBS <targets...>)
-# A gtest run by `catkin_make run_tests` (and so by `make test`).
+# A gtest run by `catkin_make run_tests` (and so by `make test`). Tests (and
+# only tests) know the source tree: EKF_SLAM_SOURCE_DIR, for the worlds and
+# the datasets beside it. Installed programs find their data through their
+# own location (ekf_slam_program_dir below) or the package's share folder.
 function(ekf_slam_add_gtest name)
   cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS" ${ARGN})
   if(NOT ARG_TIMEOUT)
@@ -12,6 +15,7 @@ function(ekf_slam_add_gtest name)
     catkin_add_gtest(${name} ${ARG_SOURCES} TIMEOUT ${ARG_TIMEOUT})
     if(TARGET ${name})
       target_link_libraries(${name} ${ARG_LIBS} gtest_main)
+      target_compile_definitions(${name} PRIVATE EKF_SLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
     endif()
   endif()
 endfunction()
@@ -62,3 +66,16 @@ function(ekf_slam_add_fuzzer name)
   add_dependencies(ekf_slam_fuzzers ${name})
   file(APPEND ${fuzz_dir}/fuzzers.txt "${name} ${ARG_CORPUS}\n")
 endfunction()
+
+# ekf_slam_add_program_script(<file>)
+# A script a program runs as a child (for example the offline runner's
+# plotting script): copied into the devel space's program folder
+# (devel/lib/ekf_slam) at configure time and installed into the install
+# space's, so that the program finds it beside itself in both, and `rosrun
+# ekf_slam <script>` works too.
+function(ekf_slam_add_program_script file)
+  get_filename_component(name ${file} NAME)
+  configure_file(${file} ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION}/${name} COPYONLY)
+  install(PROGRAMS ${file} DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endfunction()
+

@@ -1,7 +1,15 @@
 #!/usr/bin/env bash
-# Fails when catkin_lint (Debian catkin-lint) finds an error in the package
-# (a dependency missing from package.xml or from catkin_package(), a
-# misconfigured target). Warnings are counted, not fatal.
+# Fails when catkin_lint (Debian catkin-lint) finds an error or a warning in
+# the package: a dependency missing from package.xml or from catkin_package(),
+# a target that is not installed, a misconfigured target. Two checks are
+# switched off, each for a reason that holds for this package:
+#   external_interface_path: the static libraries that carry ROS include
+#     paths to their users (lms200_ros, ros_params, conversions, …) are
+#     internal and never exported; catkin_package() exports ekf_slam_core
+#     only, and it has no such path.
+#   uninstalled_script: tools/ holds developer and CI scripts run from the
+#     source tree; the scripts a program starts are installed beside it
+#     (ekf_slam_add_program_script).
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -9,13 +17,12 @@ if ! command -v catkin_lint > /dev/null; then
   echo "check_catkin_lint: catkin_lint not installed (tools/install_deps.sh installs catkin-lint)" >&2
   exit 1
 fi
-out=$(catkin_lint --pkg ekf_slam . 2>&1)
+out=$(catkin_lint --pkg ekf_slam --ignore external_interface_path --ignore uninstalled_script . 2>&1)
 rc=$?
-errors=$(grep -c ': error:' <<< "$out")
-warnings=$(grep -c ': warning:' <<< "$out")
-if [ $rc -ne 0 ] || [ "$errors" -gt 0 ]; then
-  grep ': error:' <<< "$out" | sort -u >&2
-  echo "check_catkin_lint: $errors errors" >&2
+problems=$(grep -E ': (error|warning):' <<< "$out" | sort -u)
+if [ $rc -ne 0 ] || [ -n "$problems" ]; then
+  echo "$problems" >&2
+  echo "check_catkin_lint: $(grep -c . <<< "$problems") errors or warnings" >&2
   exit 1
 fi
-echo "check_catkin_lint: no error ($warnings warnings: install rules are not written yet)"
+echo "check_catkin_lint: no error, no warning"

@@ -38,14 +38,26 @@ namespace {
 
 using ekf_slam::Pose2;
 
-void usage() {
-  std::cerr << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
-               "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
-               "       ekf_slam_offline [--config YAML] --print-config\n"
-               "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
-               "  --print-config: every parameter with the value it would run with, then exit\n"
-               "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
-               "             no figures): the fastest run, for scoring trajectories\n";
+// The folder this program runs from (devel/lib/ekf_slam or the install
+// space's lib/ekf_slam): scripts it runs are installed beside it.
+std::string programDir() {
+  char path[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", path, sizeof(path) - 1);
+  if (n <= 0) return ".";
+  const std::string exe(path, static_cast<size_t>(n));
+  const size_t slash = exe.rfind('/');
+  return slash == std::string::npos ? "." : exe.substr(0, slash);
+}
+
+void usage(std::ostream& out = std::cerr) {
+  out << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
+         "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
+         "       ekf_slam_offline [--config YAML] --print-config\n"
+         "       ekf_slam_offline --help\n"
+         "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
+         "  --print-config: every parameter with the value it would run with, then exit\n"
+         "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
+         "             no figures): the fastest run, for scoring trajectories\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -207,6 +219,9 @@ int main(int argc, char** argv) {
       trace = true;
     } else if (arg == "--print-config") {
       print_config = true;
+    } else if (arg == "--help" || arg == "-h") {
+      usage(std::cout);
+      return 0;
     } else {
       usage();
       return 1;
@@ -373,7 +388,7 @@ int main(int argc, char** argv) {
   const double processing =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (figures) {
-    const std::string script = std::string(EKF_SLAM_SOURCE_DIR) + "/tools/plot_offline.py";
+    const std::string script = programDir() + "/plot_offline.py";
     const std::string command = "/usr/bin/python3 '" + script + "' '" + out_dir + "'";
     if (::access(script.c_str(), R_OK) != 0 || std::system(command.c_str()) != 0) {
       std::cerr << "ekf_slam_offline: warning: figures not drawn (" << script << ")\n";
