@@ -48,6 +48,7 @@ check:
 	@tools/check_core_ros_free.sh
 	@tools/check_format.sh
 	@tools/check_catkin_lint.sh
+	@tools/check_rosdep.sh
 
 test: build check
 	@tools/run_tests.sh $(WS)

@@ -17,7 +17,19 @@ if ! command -v catkin_lint > /dev/null; then
   echo "check_catkin_lint: catkin_lint not installed (tools/install_deps.sh installs catkin-lint)" >&2
   exit 1
 fi
-out=$(catkin_lint --pkg ekf_slam --ignore external_interface_path --ignore uninstalled_script . 2>&1)
+# With the rosdep database (tools/rosdep_env.sh) catkin_lint also checks that
+# every dependency is a known key; without python3-rosdep2 it cannot.
+rosdep_args=()
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=tools/rosdep_env.sh
+source "$root/tools/rosdep_env.sh"
+if command -v rosdep > /dev/null && rosdep_env "$tmp" 2> /dev/null; then
+  rosdep_args=(--rosdistro debian)
+else
+  echo "check_catkin_lint: rosdep not usable (apt-get install python3-rosdep2): dependency keys not checked" >&2
+fi
+out=$(catkin_lint "${rosdep_args[@]}" --pkg ekf_slam --ignore external_interface_path --ignore uninstalled_script . 2>&1)
 rc=$?
 problems=$(grep -E ': (error|warning):' <<< "$out" | sort -u)
 if [ $rc -ne 0 ] || [ -n "$problems" ]; then
