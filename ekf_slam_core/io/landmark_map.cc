@@ -1,19 +1,16 @@
 #include "ekf_slam_core/io/landmark_map.h"
 
 #include <Eigen/LU>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
 
-#include <sys/stat.h>
-#include <unistd.h>
+#include "ekf_slam_core/io/atomic_file.h"
 
 namespace ekf_slam {
 namespace {
@@ -151,37 +148,7 @@ std::string formatLandmarkMap(const LandmarkMapFile& map) {
 }
 
 std::string writeLandmarkMap(const std::string& path, const LandmarkMapFile& map) {
-  const std::string text = formatLandmarkMap(map);
-  // A temporary file beside the target (same filesystem, so the rename is
-  // atomic), written in full and synced before it replaces anything.
-  std::string temp = path + ".XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) return path + ": cannot create a temporary file beside it: " + std::strerror(errno);
-  std::string error;
-  size_t done = 0;
-  while (done < text.size() && error.empty()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      error = path + ": write error (" + std::string(n < 0 ? std::strerror(errno) : "no space") +
-              "); the earlier file is unchanged";
-    } else {
-      done += static_cast<size_t>(n);
-    }
-  }
-  if (error.empty() && ::fchmod(fd, 0644) != 0) {
-    error = path + ": cannot set the file mode: " + std::strerror(errno);
-  }
-  if (error.empty() && ::fsync(fd) != 0) {
-    error = path + ": cannot flush to the disk (" + std::strerror(errno) +
-            "); the earlier file is unchanged";
-  }
-  if (::close(fd) != 0 && error.empty()) error = path + ": close failed: " + std::strerror(errno);
-  if (error.empty() && std::rename(temp.c_str(), path.c_str()) != 0) {
-    error = path + ": cannot replace it: " + std::strerror(errno);
-  }
-  if (!error.empty()) ::unlink(temp.c_str());
-  return error;
+  return writeFileAtomically(path, formatLandmarkMap(map));
 }
 
 std::string parseLandmarkMap(const std::string& text, const std::string& source,

@@ -28,6 +28,10 @@ std::string PipelineOptions::validate() const {
   if (!error.empty()) return "filter: " + error;
   error = association.validate();
   if (!error.empty()) return "association: " + error;
+  if (!initial_pose.allFinite() || std::abs(initial_pose.x) > kMaxOdometryCoordinate ||
+      std::abs(initial_pose.y) > kMaxOdometryCoordinate) {
+    return "initial_pose must be finite and within 1e6 m of the map origin";
+  }
   if (!initial_pose_covariance.allFinite() ||
       !initial_pose_covariance.isApprox(initial_pose_covariance.transpose()) ||
       initial_pose_covariance.diagonal().minCoeff() < 0.0) {
@@ -85,8 +89,8 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       loop_closer_(options.loop_closure.enabled
                        ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
                        : nullptr),
-      filter_(filterOptionsFor(options), Pose2(), options.initial_pose_covariance) {
-  full_recorder_.setPrior(Pose2(), options.initial_pose_covariance);
+      filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance) {
+  full_recorder_.setPrior(options.initial_pose, options.initial_pose_covariance);
 }
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
@@ -205,7 +209,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       out.causal_pose = out.pose;
       return out;  // no usable odometry: nothing to record against
     }
-    out.pose = initialised_ ? deadReckoned(odometry) : Pose2();
+    out.pose = initialised_ ? deadReckoned(odometry) : options_.initial_pose;
     out.pose_covariance =
         initialised_ ? deadReckonedCovariance(odometry) : Matrix3(Matrix3::Zero());
     out.causal_pose = out.pose;

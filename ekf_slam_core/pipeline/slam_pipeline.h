@@ -49,7 +49,12 @@ struct PipelineOptions {
   FeatureOptions features;
   FilterOptions filter;
   AssociationOptions association;
-  Matrix3 initial_pose_covariance = Matrix3::Zero();  // the map frame is the first pose
+  // The robot's pose in the map frame at the first scan, and its
+  // covariance: the origin and certain by default (the map frame is the
+  // first pose); a pose in a loaded map for localisation (load_map,
+  // /initialpose).
+  Pose2 initial_pose;
+  Matrix3 initial_pose_covariance = Matrix3::Zero();
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used

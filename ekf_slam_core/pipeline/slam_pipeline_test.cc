@@ -251,6 +251,53 @@ TEST(SlamPipeline, FeaturesInputGivesTheSameAnswerAsScans) {
   EXPECT_EQ(from_features.counters().iterations, 31);
 }
 
+// Localisation in a known frame: the pipeline started at a pose P gives,
+// scan by scan, P ∘ (what it gives started at the origin). The models are
+// all relative (odometry increments, range-bearing), so nothing but the
+// frame may change: filtered, causal and smoothed poses, and the landmarks.
+TEST(SlamPipeline, AnInitialPoseMovesTheWholeEstimateRigidly) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(11);
+  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/true);
+  options.loop_closure.enabled = true;
+  const Pose2 start(-3.5, 12.25, 2.0);
+  PipelineOptions moved_options = options;
+  moved_options.initial_pose = start;
+  ASSERT_EQ(moved_options.validate(), "");
+  SlamPipeline at_origin(options), moved(moved_options);
+  for (int i = 0; i <= 30; ++i) {
+    const Pose2 truth(0.1 * i, 0.02 * i, 0.01 * i);
+    const Scan scan = scanAt(world, compose(truth, laser), 0.1 * i, &rng);
+    const Pose2 odometry = compose(truth, Pose2(0.003 * i, 0.0, 0.001 * i));
+    const ScanResult a = at_origin.processScan(scan, odometry);
+    const ScanResult b = moved.processScan(scan, odometry);
+    ASSERT_EQ(a.outcome, b.outcome) << "scan " << i;
+    EXPECT_LT(maxAbsDifference(compose(start, a.pose), b.pose), 1e-9) << "scan " << i;
+    EXPECT_LT(maxAbsDifference(compose(start, a.causal_pose), b.causal_pose), 1e-9) << i;
+  }
+  if (::testing::Test::HasFailure()) return;
+  EXPECT_LT(maxAbsDifference(at_origin.scans().front().filtered, Pose2()), 1e-12);
+  ASSERT_EQ(at_origin.filter().landmarkCount(), moved.filter().landmarkCount());
+  EXPECT_GT(moved.filter().landmarkCount(), 3);
+  for (int k = 0; k < moved.filter().landmarkCount(); ++k) {
+    const Vector2 a = at_origin.filter().landmarkPosition(k);
+    const Vector2 b = moved.filter().landmarkPosition(k);
+    EXPECT_LT((transformFrom(start, a) - b).norm(), 1e-9) << "landmark " << k;
+  }
+  // The batch smoother stops at its convergence threshold, so its two
+  // answers agree to that (micrometres), not to rounding.
+  const std::vector<StampedPose> a = at_origin.smoothedScanPoses(), b = moved.smoothedScanPoses();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_LT(maxAbsDifference(compose(start, a[i].pose), b[i].pose), 1e-4) << "scan " << i;
+  }
+
+  // A pose the filter cannot use is refused by the options' check.
+  moved_options.initial_pose.x = std::nan("");
+  EXPECT_NE(moved_options.validate().find("initial_pose"), std::string::npos);
+}
+
 // Features from outside can be corrupt; the filter would invert a bad
 // covariance. They are refused, named, and the map is not touched.
 TEST(SlamPipeline, CorruptFeaturesAreRefusedAndNamed) {

@@ -1,0 +1,233 @@
+#include "ekf_slam_core/io/grid_map_file.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "ekf_slam_core/io/atomic_file.h"
+
+namespace ekf_slam {
+namespace {
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const size_t b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+bool parseDouble(const std::string& text, double* value) {
+  const std::string t = trim(text);
+  if (t.empty()) return false;
+  char* end = nullptr;
+  *value = std::strtod(t.c_str(), &end);
+  return end == t.c_str() + t.size() && std::isfinite(*value);
+}
+
+std::string imagePathFor(const std::string& yaml_path) {
+  const std::string suffix = ".yaml";
+  if (yaml_path.size() > suffix.size() &&
+      yaml_path.compare(yaml_path.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    return yaml_path.substr(0, yaml_path.size() - suffix.size()) + ".pgm";
+  }
+  return yaml_path + ".pgm";
+}
+
+std::string directoryOf(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "" : path.substr(0, slash + 1);
+}
+
+// map_server's reading of a pixel as an occupancy probability, inverted:
+// the pixel that reads back as `value`.
+uint8_t pixelFor(int8_t value) {
+  if (value < 0) return 205;   // unknown
+  if (value == 0) return 254;  // free, as map_saver writes it
+  if (value >= 100) return 0;  // occupied
+  return static_cast<uint8_t>(std::lround(255.0 * (1.0 - value / 100.0)));
+}
+
+// The next header token of a PGM (whitespace and # comments skipped).
+bool pgmToken(const std::string& bytes, size_t* at, std::string* token) {
+  while (*at < bytes.size()) {
+    const char c = bytes[*at];
+    if (c == '#') {
+      while (*at < bytes.size() && bytes[*at] != '\n') ++*at;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++*at;
+    } else {
+      break;
+    }
+  }
+  const size_t start = *at;
+  while (*at < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[*at]))) ++*at;
+  *token = bytes.substr(start, *at - start);
+  return !token->empty();
+}
+
+bool parseCount(const std::string& token, long* value) {
+  if (token.empty() || token.size() > 9) return false;
+  for (char c : token) {
+    if (!std::isdigit(static_cast<unsigned char>(c))) return false;
+  }
+  *value = std::atol(token.c_str());
+  return true;
+}
+
+}  // namespace
+
+std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) {
+  const long cells = static_cast<long>(grid.width) * grid.height;
+  if (grid.width <= 0 || grid.height <= 0 || cells > kMaxGridCells ||
+      static_cast<long>(grid.cells.size()) != cells) {
+    return yaml_path + ": the grid is " + std::to_string(grid.width) + " x " +
+           std::to_string(grid.height) + " cells with " + std::to_string(grid.cells.size()) +
+           " values; nothing written";
+  }
+  if (!(grid.resolution > 0.0) || !std::isfinite(grid.resolution) ||
+      !std::isfinite(grid.origin_x) || !std::isfinite(grid.origin_y) ||
+      !std::isfinite(grid.origin_yaw)) {
+    return yaml_path + ": the grid's resolution or origin is not finite; nothing written";
+  }
+  const std::string image_path = imagePathFor(yaml_path);
+  std::string image = "P5\n# ekf_slam occupancy grid\n" + std::to_string(grid.width) + " " +
+                      std::to_string(grid.height) + "\n255\n";
+  const size_t header = image.size();
+  image.resize(header + static_cast<size_t>(cells));
+  // The image's first row is the top of the map (largest y).
+  for (int row = 0; row < grid.height; ++row) {
+    const size_t from = static_cast<size_t>(grid.height - 1 - row) * grid.width;
+    for (int col = 0; col < grid.width; ++col) {
+      image[header + static_cast<size_t>(row) * grid.width + col] =
+          static_cast<char>(pixelFor(grid.cells[from + col]));
+    }
+  }
+  std::string error = writeFileAtomically(image_path, image);
+  if (!error.empty()) return error;
+  const size_t slash = image_path.find_last_of('/');
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "image: %s\nresolution: %.17g\norigin: [%.17g, %.17g, %.17g]\nnegate: 0\n"
+                "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+                (slash == std::string::npos ? image_path : image_path.substr(slash + 1)).c_str(),
+                grid.resolution, grid.origin_x, grid.origin_y, grid.origin_yaw);
+  return writeFileAtomically(yaml_path, text);
+}
+
+std::string readGridMap(const std::string& yaml_path, GridMapFile* grid) {
+  std::string text;
+  if (!readWholeFile(yaml_path, &text)) return yaml_path + ": cannot open";
+  std::string image;
+  double resolution = 0.0, occupied = 0.65, free_below = 0.196, negate = 0.0;
+  double origin[3] = {0.0, 0.0, 0.0};
+  bool have_resolution = false, have_origin = false;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::string where = yaml_path + ":" + std::to_string(number) + ": ";
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line = line.substr(0, hash);
+    if (trim(line).empty()) continue;
+    const size_t colon = line.find(':');
+    if (colon == std::string::npos) return where + "expected 'key: value'";
+    const std::string key = trim(line.substr(0, colon)), value = trim(line.substr(colon + 1));
+    if (key == "image") {
+      image = value;
+      if (image.size() >= 2 && (image.front() == '"' || image.front() == '\'') &&
+          image.back() == image.front()) {
+        image = image.substr(1, image.size() - 2);
+      }
+    } else if (key == "resolution") {
+      if (!parseDouble(value, &resolution) || !(resolution > 0.0)) {
+        return where + "resolution must be a positive number (m per cell)";
+      }
+      have_resolution = true;
+    } else if (key == "origin") {
+      if (value.size() < 2 || value.front() != '[' || value.back() != ']') {
+        return where + "origin must be [x, y, yaw]";
+      }
+      std::istringstream parts(value.substr(1, value.size() - 2));
+      std::string part;
+      int n = 0;
+      while (std::getline(parts, part, ',')) {
+        if (n >= 3 || !parseDouble(part, &origin[n])) {
+          return where + "origin must be [x, y, yaw], three finite numbers";
+        }
+        ++n;
+      }
+      if (n != 3) return where + "origin must be [x, y, yaw], three finite numbers";
+      have_origin = true;
+    } else if (key == "negate") {
+      if (!parseDouble(value, &negate) || (negate != 0.0 && negate != 1.0)) {
+        return where + "negate must be 0 or 1";
+      }
+    } else if (key == "occupied_thresh") {
+      if (!parseDouble(value, &occupied)) return where + "occupied_thresh must be a number";
+    } else if (key == "free_thresh") {
+      if (!parseDouble(value, &free_below)) return where + "free_thresh must be a number";
+    } else if (key == "mode") {
+      if (value != "trinary") {
+        return where + "mode '" + value + "': only trinary maps are read (-1, 0, 100)";
+      }
+    }  // other keys (for example map_server's own additions) are not needed
+  }
+  if (image.empty()) return yaml_path + ": no 'image'";
+  if (!have_resolution) return yaml_path + ": no 'resolution'";
+  if (!have_origin) return yaml_path + ": no 'origin'";
+  if (!(free_below >= 0.0 && free_below < occupied && occupied <= 1.0)) {
+    return yaml_path + ": thresholds must satisfy 0 <= free_thresh < occupied_thresh <= 1";
+  }
+
+  const std::string image_path = image.front() == '/' ? image : directoryOf(yaml_path) + image;
+  std::string bytes;
+  if (!readWholeFile(image_path, &bytes)) {
+    return yaml_path + ": cannot open its image " + image_path;
+  }
+  size_t at = 0;
+  std::string magic, w, h, maxval;
+  long width = 0, height = 0, max_value = 0;
+  if (!pgmToken(bytes, &at, &magic) || magic != "P5") {
+    return image_path + ": not a binary PGM image (P5)";
+  }
+  if (!pgmToken(bytes, &at, &w) || !pgmToken(bytes, &at, &h) || !pgmToken(bytes, &at, &maxval) ||
+      !parseCount(w, &width) || !parseCount(h, &height) || !parseCount(maxval, &max_value)) {
+    return image_path + ": PGM header is not 'P5 width height maxval'";
+  }
+  if (width <= 0 || height <= 0 || width * height > kMaxGridCells) {
+    return image_path + ": " + w + " x " + h + " cells (at most " + std::to_string(kMaxGridCells) +
+           " are read)";
+  }
+  if (max_value < 1 || max_value > 255) {
+    return image_path + ": maxval " + maxval + " (8-bit images only)";
+  }
+  ++at;  // the single whitespace after maxval
+  const long cells = width * height;
+  if (at > bytes.size() || static_cast<long>(bytes.size() - at) < cells) {
+    return image_path + ": " + std::to_string(bytes.size() < at ? 0 : bytes.size() - at) +
+           " bytes of pixels, " + std::to_string(cells) + " expected (the file is cut short)";
+  }
+  GridMapFile result;
+  result.resolution = resolution;
+  result.origin_x = origin[0];
+  result.origin_y = origin[1];
+  result.origin_yaw = origin[2];
+  result.width = static_cast<int>(width);
+  result.height = static_cast<int>(height);
+  result.cells.resize(static_cast<size_t>(cells));
+  for (long row = 0; row < height; ++row) {
+    const size_t to = static_cast<size_t>(height - 1 - row) * width;
+    for (long col = 0; col < width; ++col) {
+      const double pixel = static_cast<unsigned char>(bytes[at + row * width + col]);
+      const double occupancy = negate != 0.0 ? pixel / max_value : (max_value - pixel) / max_value;
+      result.cells[to + col] = occupancy > occupied ? 100 : occupancy < free_below ? 0 : -1;
+    }
+  }
+  *grid = std::move(result);
+  return "";
+}
+
+}  // namespace ekf_slam
