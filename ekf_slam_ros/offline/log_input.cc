@@ -14,6 +14,7 @@
 
 #include "ekf_slam_core/io/carmen_log.h"
 #include "ekf_slam_core/pipeline/odometry_track.h"
+#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
 
 namespace ekf_slam {
@@ -21,10 +22,6 @@ namespace {
 
 std::string stripSlash(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
-}
-
-double yawOf(double x, double y, double z, double w) {
-  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
 // The earliest and the latest scan stamp (file order need not be time order).
@@ -110,8 +107,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         if (!msg) return path + ": topic " + topic + " is not nav_msgs/Odometry";
         const auto& p = msg->pose.pose;
         track.add(msg->header.stamp.toSec(),
-                  Pose2(p.position.x, p.position.y,
-                        yawOf(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)));
+                  Pose2(p.position.x, p.position.y, ros_conversions::yawOf(p.orientation)));
       } else if (topic == "/tf" || topic == "/tf_static") {
         const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
         if (!msg) continue;
@@ -120,7 +116,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
           const std::string child = stripSlash(t.child_frame_id);
           const auto& r = t.transform.rotation;
           const Pose2 pose(t.transform.translation.x, t.transform.translation.y,
-                           yawOf(r.x, r.y, r.z, r.w));
+                           ros_conversions::yawOf(r));
           if (options.odometry_source == "tf" && parent == odom_frame && child == base_frame) {
             track.add(t.header.stamp.toSec(), pose);
             tf_buffer.setTransform(t, "bag");
@@ -168,7 +164,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
             tf_buffer.lookupTransform(odom_frame, base_frame, stamp);
         const auto& r = t.transform.rotation;
         s.odometry =
-            Pose2(t.transform.translation.x, t.transform.translation.y, yawOf(r.x, r.y, r.z, r.w));
+            Pose2(t.transform.translation.x, t.transform.translation.y, ros_conversions::yawOf(r));
       } catch (const tf2::TransformException&) {
         // Before the first or after the last sample: the track's nearest.
       }

@@ -83,6 +83,21 @@ double LiveMapPublisher::lastBuildSeconds() const {
   return last_build_seconds_;
 }
 
+bool LiveMapPublisher::latest(nav_msgs::OccupancyGrid* map,
+                              std::chrono::steady_clock::time_point* when) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!have_latest_) return false;
+  *map = latest_;
+  *when = latest_time_;
+  return true;
+}
+
+void LiveMapPublisher::forget() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  have_latest_ = false;
+  latest_ = nav_msgs::OccupancyGrid();
+}
+
 void LiveMapPublisher::run() {
   for (;;) {
     std::vector<SlamPipeline::KeyScan> keys;
@@ -103,6 +118,9 @@ void LiveMapPublisher::run() {
     metadata_publisher_.publish(map.info);
     std::lock_guard<std::mutex> lock(mutex_);
     ++published_;
+    latest_ = map;
+    latest_time_ = std::chrono::steady_clock::now();
+    have_latest_ = true;
     last_build_seconds_ =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     pending_ = false;

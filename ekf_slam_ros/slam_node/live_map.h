@@ -8,6 +8,7 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
@@ -41,6 +42,10 @@ class LiveMapPublisher {
               const std_msgs::Header& header);
   long published() const;
   double lastBuildSeconds() const;
+  // The last grid published and when; false when none was (or after
+  // forget()).
+  bool latest(nav_msgs::OccupancyGrid* map, std::chrono::steady_clock::time_point* when) const;
+  void forget();
 
  private:
   void run();
@@ -56,6 +61,9 @@ class LiveMapPublisher {
   std_msgs::Header header_;
   long published_ = 0;
   double last_build_seconds_ = 0.0;
+  bool have_latest_ = false;
+  nav_msgs::OccupancyGrid latest_;
+  std::chrono::steady_clock::time_point latest_time_;
   std::thread worker_;
 };
 

@@ -5,11 +5,18 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <tf2/exceptions.h>
 
+#include <unistd.h>
+
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "ekf_slam_core/filter/chi_square.h"
+#include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_core/mapping/occupancy_grid.h"
+#include "ekf_slam_ros/conversions/grid_conversion.h"
+#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
 
@@ -24,17 +31,23 @@ constexpr DropReason kAllReasons[] = {
     DropReason::kBadFeatures,
 };
 
-double yawOf(const geometry_msgs::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+using ros_conversions::fromPoseMessage;
+using ros_conversions::fromTransformMessage;
+using ros_conversions::toPoseMessage;
+
+// The occupancy grid saved beside a landmark map: "office.yaml" →
+// "office_grid.yaml" (+ "office_grid.pgm").
+std::string gridPathFor(const std::string& landmark_path) {
+  const std::string suffix = ".yaml";
+  const bool yaml =
+      landmark_path.size() > suffix.size() &&
+      landmark_path.compare(landmark_path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return (yaml ? landmark_path.substr(0, landmark_path.size() - suffix.size()) : landmark_path) +
+         "_grid.yaml";
 }
 
-geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
-  geometry_msgs::Pose p;
-  p.position.x = pose.x;
-  p.position.y = pose.y;
-  p.orientation.z = std::sin(0.5 * pose.theta);
-  p.orientation.w = std::cos(0.5 * pose.theta);
-  return p;
+std::string withoutLeadingSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
 
 }  // namespace
@@ -119,6 +132,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   } else {
     input_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
   }
+  initial_pose_subscriber_ = node_.subscribe("initialpose", 2, &SlamNode::onInitialPose, this);
   tf_timer_ =
       node_.createTimer(ros::Duration(1.0 / params_.tf_publish_rate), &SlamNode::onTfTimer, this);
   // Scans waiting for a late transform are re-tried even when no new scan
@@ -279,8 +293,7 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
   if (behind) *behind = false;
   try {
     const geometry_msgs::TransformStamped t = tf_buffer_.lookupTransform(target, source, stamp);
-    *pose =
-        Pose2(t.transform.translation.x, t.transform.translation.y, yawOf(t.transform.rotation));
+    *pose = fromTransformMessage(t.transform);
     return true;
   } catch (const tf2::TransformException& e) {
     std::ostringstream text;
@@ -367,7 +380,13 @@ Scan SlamNode::StoredScan::toScan() const {
 void SlamNode::createPipeline(const Pose2& laser_pose) {
   config_.pipeline.filter.laser_pose = laser_pose;
   laser_pose_ = laser_pose;
-  pipeline_ = std::make_unique<SlamPipeline>(config_.pipeline);
+  PipelineOptions options = config_.pipeline;
+  if (start_pose_) {
+    options.initial_pose = *start_pose_;
+    options.initial_pose_covariance = start_covariance_;
+    start_pose_.reset();
+  }
+  pipeline_ = std::make_unique<SlamPipeline>(options);
   if (seed_map_) {
     int refused = 0;
     for (const LandmarkRecord& r : seed_map_->landmarks) {
@@ -434,13 +453,9 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   geometry_msgs::PoseWithCovarianceStamped pose;
   pose.header = map_header;
   pose.pose.pose = toPoseMessage(result.causal_pose);
-  // (x, y, yaw) into the 6×6 (x, y, z, roll, pitch, yaw) layout; between
-  // iterations the covariance has grown with the motion since the last one.
-  const Matrix3 c = result.pose_covariance;
-  const int index[3] = {0, 1, 5};
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) pose.pose.covariance[index[r] * 6 + index[k]] = c(r, k);
-  }
+  // Between iterations the covariance has grown with the motion since the
+  // last one.
+  ros_conversions::setPlanarCovariance(result.pose_covariance, &pose.pose.covariance);
   pose_publisher_.publish(pose);
 
   geometry_msgs::PoseStamped path_pose;
@@ -607,6 +622,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
 
   status.add("paused", paused_);
   status.add("localize only", localize_only_);
+  status.add("relocalisations (initialpose)", relocalisations_);
   status.add("scans received", scans_received_);
   status.add("scans processed", pipeline_ ? counters.scans : 0L);
   status.add("iterations", iterations);
@@ -661,7 +677,7 @@ void SlamNode::publishLoopClosedPath(const ros::Time& data_stamp) {
 // A new grid when the key scans changed (a new key scan or a new
 // optimisation) and the worker is free; it never blocks the scans.
 void SlamNode::onMapTimer(const ros::TimerEvent&) {
-  if (!pipeline_ || !live_map_ || !laser_pose_) return;
+  if (!pipeline_ || !live_map_ || !laser_pose_ || hold_loaded_grid_) return;
   const long optimisations = pipeline_->backEndOptimisations();
   std::vector<SlamPipeline::KeyScan> keys = pipeline_->keyScans(/*with_points=*/true);
   if (keys.empty() ||
@@ -699,6 +715,10 @@ void SlamNode::resetState() {
 bool SlamNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
   resetState();
   seed_map_.reset();
+  start_pose_.reset();
+  node_grid_.reset();
+  hold_loaded_grid_ = false;
+  if (live_map_) live_map_->forget();
   localize_only_ = params_.localize_only;
   std_msgs::Header header;
   header.stamp = last_scan_stamp_;
@@ -726,31 +746,69 @@ bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response)
   } else {
     map.frame = params_.map_frame;
   }
+  // The grid first: a failure leaves the landmark file as it was. Each file
+  // is replaced atomically; a map saved without a grid drops the grid an
+  // earlier save left at that path, so that a load never pairs the two.
+  const std::string grid_path = gridPathFor(request.path);
+  nav_msgs::OccupancyGrid grid;
+  std::string grid_note;
+  if (currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
+    const std::string error = writeGridMap(grid_path, ros_conversions::toGridMapFile(grid));
+    if (!error.empty()) {
+      response.success = false;
+      response.message = error + " (nothing saved)";
+      ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
+      return true;
+    }
+    response.grid_path = grid_path;
+    grid_note = " and the " + std::to_string(grid.info.width) + " x " +
+                std::to_string(grid.info.height) + " occupancy grid to " + grid_path;
+  } else {
+    std::remove(grid_path.c_str());
+    grid_note = "; no occupancy grid yet (nothing published on map)";
+  }
   const std::string error = writeLandmarkMap(request.path, map);
   response.success = error.empty();
-  response.message =
-      error.empty() ? std::to_string(map.landmarks.size()) + " landmarks written to " + request.path
-                    : error;
+  response.message = error.empty() ? std::to_string(map.landmarks.size()) +
+                                         " landmarks written to " + request.path + grid_note
+                                   : error;
   ROS_INFO("ekf_slam_node: save_map: %s", response.message.c_str());
   return true;
 }
 
 bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
-  LandmarkMapFile map;
-  const std::string error = readLandmarkMap(request.path, &map);
-  if (!error.empty()) {
-    response.success = false;
-    response.message = error + " (the current map is kept)";
-    response.landmarks = 0;
+  response.success = false;
+  response.landmarks = 0;
+  auto refuse = [&](const std::string& problem) {
+    response.message = problem + " (the current map is kept)";
     ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
     return true;
+  };
+  LandmarkMapFile map;
+  std::string error = readLandmarkMap(request.path, &map);
+  if (!error.empty()) return refuse(error);
+  // The grid saved beside it, if there is one: a broken one refuses the load.
+  const std::string grid_path = gridPathFor(request.path);
+  std::optional<GridMapFile> grid;
+  if (::access(grid_path.c_str(), F_OK) == 0) {
+    grid.emplace();
+    error = readGridMap(grid_path, &*grid);
+    if (!error.empty()) return refuse(error);
+  }
+  Pose2 start;
+  Matrix3 start_covariance = Matrix3::Zero();
+  if (request.set_pose) {
+    start = fromPoseMessage(request.pose.pose);
+    start_covariance = ros_conversions::planarCovariance(request.pose.covariance);
   }
   if (map.frame != params_.map_frame) {
     ROS_WARN("ekf_slam_node: load_map: the file's frame '%s' differs from map_frame '%s'",
              map.frame.c_str(), params_.map_frame.c_str());
   }
-  // The filter restarts with the robot at the map origin and the loaded
-  // landmarks as a prior, uncorrelated with the pose.
+  // The filter restarts at the given pose (the map origin by default) with
+  // the loaded landmarks as a prior, uncorrelated with the pose.
+  error = setStartPose(start, start_covariance);
+  if (!error.empty()) return refuse("pose: " + error);
   resetState();
   seed_map_ = map;
   localize_only_ = request.localize_only;
@@ -759,13 +817,94 @@ bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response)
   header.stamp = last_scan_stamp_;
   header.frame_id = params_.map_frame;
   publishLandmarkMap(header);
+  hold_loaded_grid_ = false;
+  if (grid) {
+    publishNodeGrid(ros_conversions::toOccupancyGridMessage(*grid, header));
+    hold_loaded_grid_ = localize_only_;  // mapping on: the live map takes over
+  }
   response.success = true;
   response.landmarks = static_cast<int>(map.landmarks.size());
-  response.message = std::to_string(map.landmarks.size()) + " landmarks loaded from " +
-                     request.path +
-                     (localize_only_ ? "; localisation only" : "; mapping continues");
+  std::ostringstream text;
+  text.setf(std::ios::fixed);
+  text.precision(3);
+  text << map.landmarks.size() << " landmarks loaded from " << request.path;
+  if (grid) text << " and a " << grid->width << " x " << grid->height << " grid from " << grid_path;
+  text << "; the robot starts at (" << start.x << ", " << start.y << ", " << radToDeg(start.theta)
+       << " deg)" << (localize_only_ ? "; localisation only" : "; mapping continues");
+  response.message = text.str();
   ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
   return true;
+}
+
+std::string SlamNode::setStartPose(const Pose2& pose, const Matrix3& covariance) {
+  if (!pose.allFinite()) return "not finite";
+  const Matrix3 symmetric = 0.5 * (covariance + covariance.transpose());
+  if (!symmetric.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9) ||
+      Eigen::SelfAdjointEigenSolver<Matrix3>(symmetric).eigenvalues().minCoeff() < 0.0) {
+    return "the (x, y, yaw) covariance is not finite, symmetric and positive semi-definite";
+  }
+  PipelineOptions options = config_.pipeline;
+  options.initial_pose = pose;
+  options.initial_pose_covariance = symmetric;
+  const std::string error = options.validate();
+  if (!error.empty()) return error;
+  start_pose_ = pose;
+  start_covariance_ = symmetric;
+  return "";
+}
+
+void SlamNode::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message) {
+  if (withoutLeadingSlash(message.header.frame_id) != params_.map_frame) {
+    ROS_WARN(
+        "ekf_slam_node: initialpose in frame '%s' ignored: it must be given in '%s' (set "
+        "rviz's fixed frame to it)",
+        message.header.frame_id.c_str(), params_.map_frame.c_str());
+    return;
+  }
+  const Pose2 pose = fromPoseMessage(message.pose.pose);
+  const Matrix3 covariance = ros_conversions::planarCovariance(message.pose.covariance);
+  // The landmarks mapped so far (or the map loaded and not yet used) stay,
+  // as the prior of the restarted filter.
+  std::optional<LandmarkMapFile> prior = seed_map_;
+  if (pipeline_) prior = toLandmarkMapFile(pipeline_->filter(), params_.map_frame);
+  const std::string error = setStartPose(pose, covariance);
+  if (!error.empty()) {
+    ROS_WARN("ekf_slam_node: initialpose ignored: %s", error.c_str());
+    return;
+  }
+  const Pose2 start = *start_pose_;
+  const Matrix3 start_covariance = start_covariance_;
+  resetState();
+  seed_map_ = prior;
+  if (laser_pose_) createPipeline(*laser_pose_);  // else at the next scan
+  ++relocalisations_;
+  ROS_INFO(
+      "ekf_slam_node: initialpose: the filter restarts at (%.3f m, %.3f m, %.1f deg), "
+      "sigma (%.3f m, %.3f m, %.1f deg), with %zu landmarks as its prior",
+      start.x, start.y, radToDeg(start.theta), std::sqrt(start_covariance(0, 0)),
+      std::sqrt(start_covariance(1, 1)), radToDeg(std::sqrt(start_covariance(2, 2))),
+      prior ? prior->landmarks.size() : size_t{0});
+}
+
+bool SlamNode::currentGrid(nav_msgs::OccupancyGrid* map) const {
+  nav_msgs::OccupancyGrid live;
+  std::chrono::steady_clock::time_point live_time;
+  const bool have_live = live_map_ && live_map_->latest(&live, &live_time);
+  if (node_grid_ && (!have_live || node_grid_time_ >= live_time)) {
+    *map = *node_grid_;
+    return true;
+  }
+  if (have_live) {
+    *map = std::move(live);
+    return true;
+  }
+  return false;
+}
+
+void SlamNode::publishNodeGrid(const nav_msgs::OccupancyGrid& map) {
+  map_publisher_.publish(map);
+  node_grid_ = map;
+  node_grid_time_ = std::chrono::steady_clock::now();
 }
 
 bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
@@ -801,8 +940,7 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     return true;
   }
 
-  const nav_msgs::OccupancyGrid map = toOccupancyGridMessage(grid, header);
-  map_publisher_.publish(map);
+  publishNodeGrid(toOccupancyGridMessage(grid, header));
 
   std::ostringstream text;
   text << "smoothed " << smoothed.size() << " scan poses (" << pipeline_->counters().iterations

@@ -27,6 +27,8 @@
 #include <ekf_slam/Features.h>
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
@@ -34,6 +36,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <chrono>
 #include <deque>
 #include <map>
 #include <memory>
@@ -82,6 +85,9 @@ class SlamNode {
   };
 
   void onScan(const sensor_msgs::LaserScan::ConstPtr& message);
+  // rviz's "2D Pose Estimate": the filter restarts at the given pose, the
+  // current landmarks (or the loaded map) as its prior.
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);
   void onFeatures(const Features::ConstPtr& message);
   // Common to both inputs: the clock and pause checks (false: dropped).
   bool acceptingInput();
@@ -111,6 +117,13 @@ class SlamNode {
   bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
   bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
   void resetState();
+  // The pose (map frame) and covariance the next pipeline starts at; empty
+  // when the pose and covariance are unusable, else the problem.
+  std::string setStartPose(const Pose2& pose, const Matrix3& covariance);
+  // The grid last published on `map` (live map, ~smooth or a loaded map);
+  // false when there is none.
+  bool currentGrid(nav_msgs::OccupancyGrid* map) const;
+  void publishNodeGrid(const nav_msgs::OccupancyGrid& map);
 
   SlamNodeParams params_;
   SlamConfig config_;
@@ -121,7 +134,7 @@ class SlamNode {
   GuardedTfListener tf_listener_;  // refuses future-stamped and invalid transforms
   tf2_ros::TransformBroadcaster tf_broadcaster_;
 
-  ros::Subscriber input_subscriber_;
+  ros::Subscriber input_subscriber_, initial_pose_subscriber_;
   ros::Publisher pose_publisher_, path_publisher_, landmarks_publisher_, landmark_map_publisher_,
       association_publisher_, smoothed_path_publisher_, map_publisher_, odometry_path_publisher_,
       loop_closed_path_publisher_;
@@ -136,8 +149,17 @@ class SlamNode {
   // SLAM state. The pipeline is created at the first scan, when the laser
   // pose is known (from the configuration or tf).
   std::unique_ptr<SlamPipeline> pipeline_;
-  std::optional<Pose2> laser_pose_;          // base_link → laser the pipeline uses
-  std::optional<LandmarkMapFile> seed_map_;  // a loaded map waiting for the pipeline
+  std::optional<Pose2> laser_pose_;             // base_link → laser the pipeline uses
+  std::optional<LandmarkMapFile> seed_map_;     // a loaded map waiting for the pipeline
+  std::optional<Pose2> start_pose_;             // where that pipeline starts (map frame) …
+  Matrix3 start_covariance_ = Matrix3::Zero();  // … and how sure that is
+  long relocalisations_ = 0;                    // /initialpose messages taken
+  // The grid the node published itself (~smooth, ~load_map) and when; the
+  // live map keeps its own. A grid loaded for localisation stays on `map`:
+  // the live map does not replace it.
+  std::optional<nav_msgs::OccupancyGrid> node_grid_;
+  std::chrono::steady_clock::time_point node_grid_time_;
+  bool hold_loaded_grid_ = false;
   bool localize_only_ = false;
   bool paused_ = false;
   std::deque<PendingInput> queue_;

@@ -33,6 +33,7 @@
 #include <set>
 #include <thread>
 
+#include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 
@@ -81,6 +82,8 @@ class Robot {
     std::lock_guard<std::mutex> lock(mutex_);
     return last_good_stamp_;
   }
+  // odom → base_link (= the true pose in the odometry frame) at `stamp`.
+  Pose2 odometryAt(const ros::Time& stamp) const { return poseAt((stamp - start_).toSec()); }
   bool wasScanStamp(const ros::Time& stamp) {
     std::lock_guard<std::mutex> lock(mutex_);
     return good_stamps_.count(stamp) > 0;
@@ -219,6 +222,10 @@ class Observer {
     std::lock_guard<std::mutex> lock(mutex_);
     return grid_;
   }
+  long grids() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return grids_;
+  }
   ekf_slam::Features features() {
     std::lock_guard<std::mutex> lock(mutex_);
     return features_;
@@ -267,6 +274,7 @@ class Observer {
   void onGrid(const nav_msgs::OccupancyGrid& grid) {
     std::lock_guard<std::mutex> lock(mutex_);
     grid_ = grid;
+    ++grids_;
   }
   void onFeatures(const ekf_slam::Features& features) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -295,6 +303,7 @@ class Observer {
   std::vector<std::string> log_;
   long other_lines_ = 0;
   nav_msgs::OccupancyGrid grid_;
+  long grids_ = 0;
   size_t smoothed_poses_ = 0;
 };
 
@@ -554,6 +563,115 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   }
   EXPECT_GT(occupied, 50) << "the room's walls";
   EXPECT_GT(free_cells, occupied) << "the room's inside";
+}
+
+bool sameGrid(const nav_msgs::OccupancyGrid& map, const GridMapFile& file) {
+  return map.info.width == static_cast<uint32_t>(file.width) &&
+         map.info.height == static_cast<uint32_t>(file.height) &&
+         map.info.resolution == static_cast<float>(file.resolution) &&
+         map.info.origin.position.x == file.origin_x &&
+         map.info.origin.position.y == file.origin_y && map.data == file.cells;
+}
+
+double headingOf(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+// Localisation in a saved map: save_map writes the occupancy grid beside the
+// landmarks and load_map publishes it again bit for bit; a robot loaded at a
+// wrong pose (LoadMap's pose field) stays wrong until rviz's "2D Pose
+// Estimate" (/initialpose) gives the right one, then tracks it.
+TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
+  ASSERT_TRUE(trigger("reset"));
+  trigger("resume");
+  const long grids_before = observer_.grids();
+  ASSERT_TRUE(waitFor([&] { return confirmedLandmarks(observer_.map()) >= 3; }, 30.0));
+  ASSERT_TRUE(waitFor([&] { return observer_.grids() > grids_before; }, 30.0))
+      << "no live occupancy grid on map";
+
+  // map → odom as mapped (odometry is the truth here, so this holds).
+  const geometry_msgs::PoseWithCovarianceStamped mapped = observer_.pose();
+  const Pose2 map_to_odom = compose(Pose2(mapped.pose.pose.position.x, mapped.pose.pose.position.y,
+                                          headingOf(mapped.pose.pose.orientation)),
+                                    inverse(robot_.odometryAt(mapped.header.stamp)));
+  auto truthAt = [&](const ros::Time& stamp) {
+    return compose(map_to_odom, robot_.odometryAt(stamp));
+  };
+
+  // Save while paused, after any grid in the making has been published.
+  ASSERT_TRUE(trigger("pause"));
+  ros::WallDuration(1.5).sleep();
+  const nav_msgs::OccupancyGrid shown = observer_.grid();
+  char dir[] = "/tmp/slam_node_gridXXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/lab.yaml";
+  ekf_slam::SaveMap save;
+  save.request.path = path;
+  ASSERT_TRUE(call("save_map", &save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  EXPECT_EQ(save.response.grid_path, std::string(dir) + "/lab_grid.yaml");
+  GridMapFile file;
+  ASSERT_EQ(readGridMap(save.response.grid_path, &file), "");
+  EXPECT_TRUE(sameGrid(shown, file)) << "the saved grid is not the one on map";
+
+  // Load at a pose 0.5 m off the truth, localisation only: the grid comes
+  // back on map bit for bit, and the pose stays off.
+  const long grids_at_load = observer_.grids();
+  const ros::Time now = ros::Time::now();
+  const Pose2 wrong = compose(truthAt(now), Pose2(0.5, 0.0, 0.0));
+  ekf_slam::LoadMap load;
+  load.request.path = path;
+  load.request.localize_only = true;
+  load.request.set_pose = true;
+  load.request.pose.pose.position.x = wrong.x;
+  load.request.pose.pose.position.y = wrong.y;
+  load.request.pose.pose.orientation.z = std::sin(0.5 * wrong.theta);
+  load.request.pose.pose.orientation.w = std::cos(0.5 * wrong.theta);
+  ASSERT_TRUE(call("load_map", &load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  ASSERT_TRUE(waitFor([&] { return observer_.grids() > grids_at_load; }, 5.0));
+  EXPECT_TRUE(sameGrid(observer_.grid(), file)) << "the loaded grid differs from the saved one";
+  ASSERT_TRUE(trigger("resume"));
+  ros::WallDuration(2.0).sleep();
+  auto errorNow = [&](double* heading_error) {
+    const geometry_msgs::PoseWithCovarianceStamped p = observer_.pose();
+    const Pose2 truth = truthAt(p.header.stamp);
+    *heading_error = std::abs(wrapAngle(headingOf(p.pose.pose.orientation) - truth.theta));
+    return std::hypot(p.pose.pose.position.x - truth.x, p.pose.pose.position.y - truth.y);
+  };
+  double heading_error = 0.0;
+  EXPECT_GT(errorNow(&heading_error), 0.3) << "a wrong start should stay wrong without help";
+  // The grid loaded for localisation stays: the live map does not replace it.
+  EXPECT_TRUE(sameGrid(observer_.grid(), file));
+
+  // /initialpose with the truth (rviz gives about this covariance).
+  ros::NodeHandle node;
+  ros::Publisher initial_pose =
+      node.advertise<geometry_msgs::PoseWithCovarianceStamped>("initialpose", 1, true);
+  const Pose2 truth = truthAt(ros::Time::now());
+  geometry_msgs::PoseWithCovarianceStamped estimate;
+  estimate.header.frame_id = "map";
+  estimate.header.stamp = ros::Time::now();
+  estimate.pose.pose.position.x = truth.x;
+  estimate.pose.pose.position.y = truth.y;
+  estimate.pose.pose.orientation.z = std::sin(0.5 * truth.theta);
+  estimate.pose.pose.orientation.w = std::cos(0.5 * truth.theta);
+  estimate.pose.covariance[0] = estimate.pose.covariance[7] = 0.05 * 0.05;
+  estimate.pose.covariance[35] = std::pow(degToRad(3.0), 2);
+  initial_pose.publish(estimate);
+  EXPECT_TRUE(
+      waitFor([&] { return observer_.diagnostic("relocalisations (initialpose)") >= 1.0; }, 10.0));
+  ros::WallDuration(3.0).sleep();
+  EXPECT_LT(errorNow(&heading_error), 0.05);
+  EXPECT_LT(heading_error, degToRad(2.0));
+  EXPECT_EQ(observer_.diagnosticText("localize only"), "True");
+
+  // One in another frame is ignored, and says why.
+  estimate.header.frame_id = "odom";
+  initial_pose.publish(estimate);
+  ros::WallDuration(2.0).sleep();
+  EXPECT_TRUE(observer_.logged("initialpose in frame 'odom'", "ignored"));
+  std::system(("rm -rf '" + std::string(dir) + "'").c_str());
 }
 
 // input: features (slam_node_features_input.test): ekf_slam_node maps from

@@ -1,0 +1,53 @@
+#include "ekf_slam_ros/conversions/pose_conversion.h"
+
+#include <cmath>
+
+namespace ekf_slam {
+namespace ros_conversions {
+namespace {
+constexpr int kPlanarIndex[3] = {0, 1, 5};  // x, y, yaw in the 6×6 layout
+}  // namespace
+
+double yawOf(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+geometry_msgs::Quaternion quaternionOfYaw(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.z = std::sin(0.5 * yaw);
+  q.w = std::cos(0.5 * yaw);
+  return q;
+}
+
+geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
+  geometry_msgs::Pose p;
+  p.position.x = pose.x;
+  p.position.y = pose.y;
+  p.orientation = quaternionOfYaw(pose.theta);
+  return p;
+}
+
+Pose2 fromPoseMessage(const geometry_msgs::Pose& pose) {
+  return Pose2(pose.position.x, pose.position.y, yawOf(pose.orientation));
+}
+
+Pose2 fromTransformMessage(const geometry_msgs::Transform& transform) {
+  return Pose2(transform.translation.x, transform.translation.y, yawOf(transform.rotation));
+}
+
+Matrix3 planarCovariance(const boost::array<double, 36>& covariance) {
+  Matrix3 planar;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) planar(r, c) = covariance[kPlanarIndex[r] * 6 + kPlanarIndex[c]];
+  }
+  return planar;
+}
+
+void setPlanarCovariance(const Matrix3& planar, boost::array<double, 36>* covariance) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) (*covariance)[kPlanarIndex[r] * 6 + kPlanarIndex[c]] = planar(r, c);
+  }
+}
+
+}  // namespace ros_conversions
+}  // namespace ekf_slam

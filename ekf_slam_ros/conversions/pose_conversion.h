@@ -1,0 +1,32 @@
+// Planar poses between ROS messages and the core (Pose2, 3×3 covariances):
+// the one place where a quaternion becomes a heading and back, for the live
+// node and the offline runner alike, so the two read a transform the same
+// way to the last bit.
+#pragma once
+
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Quaternion.h>
+#include <geometry_msgs/Transform.h>
+
+#include <boost/array.hpp>
+
+#include "ekf_slam_core/geometry/pose2.h"
+
+namespace ekf_slam {
+namespace ros_conversions {
+
+// The rotation's heading about z (a planar robot: roll and pitch ignored).
+double yawOf(const geometry_msgs::Quaternion& q);
+geometry_msgs::Quaternion quaternionOfYaw(double yaw);
+
+geometry_msgs::Pose toPoseMessage(const Pose2& pose);
+Pose2 fromPoseMessage(const geometry_msgs::Pose& pose);
+Pose2 fromTransformMessage(const geometry_msgs::Transform& transform);
+
+// The (x, y, yaw) block of a ROS 6×6 covariance (row-major, x y z roll
+// pitch yaw), and the block written into one (other entries untouched).
+Matrix3 planarCovariance(const boost::array<double, 36>& covariance);
+void setPlanarCovariance(const Matrix3& planar, boost::array<double, 36>* covariance);
+
+}  // namespace ros_conversions
+}  // namespace ekf_slam
