@@ -4,7 +4,7 @@ while, writes a PNG screenshot of the screen and reports every error rviz
 printed. Used by the rviz smoke rostest (test/rviz_smoke.test) and to make
 the README's screenshot:
 
-  rviz_screenshot.py --config config/ekf_slam.rviz --out shot.png [--wait 20]
+  rviz_screenshot.py --config config/rviz/sim.rviz --out shot.png [--wait 20]
 
 Needs a ROS master (rviz is a ROS node), Xvfb, xwd, rviz. Exit status 0 when
 rviz ran for the whole wait, the screenshot was written and rviz printed no
