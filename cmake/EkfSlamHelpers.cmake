@@ -79,3 +79,4 @@ function(ekf_slam_add_program_script file)
   install(PROGRAMS ${file} DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 endfunction()
 
+

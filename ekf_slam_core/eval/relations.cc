@@ -49,31 +49,6 @@ std::string readRecords(const std::string& path, std::vector<T>* out, Parse pars
 
 }  // namespace
 
-std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out) {
-  return readRecords(path, out, [](std::istringstream& fields, StampedPose* p) -> std::string {
-    double x, y, theta;
-    std::string extra;
-    if (!(fields >> p->stamp >> x >> y >> theta) || (fields >> extra)) {
-      return "expected 'stamp x y theta'";
-    }
-    if (!std::isfinite(p->stamp) || !std::isfinite(x) || !std::isfinite(y) ||
-        !std::isfinite(theta)) {
-      return "non-finite value";
-    }
-    p->pose = Pose2(x, y, theta);
-    return "";
-  });
-}
-
-std::string writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
-  FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) return path + ": cannot write";
-  for (const StampedPose& p : poses) {
-    std::fprintf(f, "%.6f %.6f %.6f %.6f\n", p.stamp, p.pose.x, p.pose.y, p.pose.theta);
-  }
-  return std::fclose(f) == 0 ? "" : path + ": write error";
-}
-
 std::string readRelations(const std::string& path, std::vector<Relation>* out) {
   return readRecords(path, out, [](std::istringstream& fields, Relation* r) -> std::string {
     double x, y, z, roll, pitch, yaw;

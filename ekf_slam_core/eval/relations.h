@@ -1,6 +1,6 @@
 // The relation-based accuracy metric of Kümmerle et al. 2009 ("On measuring
 // the accuracy of SLAM algorithms"), as described in
-// ../shared/datasets/README.md, and the trajectory/relations file formats.
+// ../shared/datasets/README.md, and the relations file format.
 //
 // A relation (t1, t2, δ) is the ground-truth motion from the pose at scan
 // time t1 to the pose at t2, in the frame of the first. For an estimated
@@ -12,25 +12,19 @@
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/geometry/stamped_pose.h"
+#include "ekf_slam_core/io/trajectory_file.h"
 
 namespace ekf_slam {
-
-struct StampedPose {
-  double stamp = 0.0;  // s
-  Pose2 pose;
-};
 
 struct Relation {
   double t1 = 0.0, t2 = 0.0;  // s
   Pose2 motion;               // x(t1)⁻¹ ⊕ x(t2), ground truth
 };
 
-// Reads "stamp x y theta" lines (# comments and blank lines skipped).
-// Returns an empty string on success, else "<path>:<line>: <problem>".
-std::string readTrajectory(const std::string& path, std::vector<StampedPose>* out);
-std::string writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
-
-// Reads "t1 t2 x y z roll pitch yaw" lines.
+// Reads "t1 t2 x y z roll pitch yaw" lines (# comments and blank lines
+// skipped). Returns an empty string on success, else "<path>:<line>:
+// <problem>". Trajectories: io/trajectory_file.h.
 std::string readRelations(const std::string& path, std::vector<Relation>* out);
 
 struct ErrorStats {

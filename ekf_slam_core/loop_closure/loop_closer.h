@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "ekf_slam_core/eval/relations.h"
+#include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/correlative_matcher.h"
 #include "ekf_slam_core/pose_graph/pose_graph.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"

@@ -27,9 +27,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_core/features/extract_features.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/full_smoother.h"

@@ -31,7 +31,7 @@
 #include <sstream>
 #include <string>
 
-#include "ekf_slam_core/eval/relations.h"
+#include "ekf_slam_core/io/trajectory_file.h"
 #include "ekf_slam_ros/offline/log_input.h"
 
 namespace {
