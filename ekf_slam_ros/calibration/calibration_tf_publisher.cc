@@ -14,6 +14,8 @@
 #include <cmath>
 #include <string>
 
+#include "ekf_slam_ros/conversions/pose_conversion.h"
+
 #include "ekf_slam_ros/calibration/laser_mount.h"
 
 int main(int argc, char** argv) {
@@ -39,8 +41,7 @@ int main(int argc, char** argv) {
   transform.transform.translation.x = mount.x;
   transform.transform.translation.y = mount.y;
   transform.transform.translation.z = mount.z;
-  transform.transform.rotation.z = std::sin(mount.yaw / 2.0);
-  transform.transform.rotation.w = std::cos(mount.yaw / 2.0);
+  transform.transform.rotation = ekf_slam::ros_conversions::quaternionOfYaw(mount.yaw);
   tf2_ros::StaticTransformBroadcaster broadcaster;
   broadcaster.sendTransform(transform);
   ROS_INFO("calibration: %s -> %s at x %.3f m, y %.3f m, z %.3f m, yaw %.4f rad (from %s)",

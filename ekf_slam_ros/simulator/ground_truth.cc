@@ -4,16 +4,13 @@
 
 #include <cmath>
 
+#include "ekf_slam_ros/conversions/pose_conversion.h"
+
 namespace ekf_slam {
 namespace sim {
 
 geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
-  geometry_msgs::Pose message;
-  message.position.x = pose.x;
-  message.position.y = pose.y;
-  message.orientation.z = std::sin(pose.theta / 2.0);
-  message.orientation.w = std::cos(pose.theta / 2.0);
-  return message;
+  return ros_conversions::toPoseMessage(pose);
 }
 
 nav_msgs::Odometry toOdometry(const Pose2& pose, double velocity, double rotational_velocity,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ekf_slam_core/filter/chi_square.h"
+#include "ekf_slam_ros/conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace {
@@ -63,10 +64,7 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a = 1.0f) {
 }
 
 geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
+  return ros_conversions::quaternionOfYaw(yaw);
 }
 
 visualization_msgs::Marker marker(const std_msgs::Header& header, const std::string& ns, int id,

@@ -534,8 +534,7 @@ void SlamNode::publishMapToOdom(const ros::Time& data_stamp) {
   t.child_frame_id = params_.odom_frame;
   t.transform.translation.x = map_to_odom_.x;
   t.transform.translation.y = map_to_odom_.y;
-  t.transform.rotation.z = std::sin(0.5 * map_to_odom_.theta);
-  t.transform.rotation.w = std::cos(0.5 * map_to_odom_.theta);
+  t.transform.rotation = ros_conversions::quaternionOfYaw(map_to_odom_.theta);
   tf_broadcaster_.sendTransform(t);
 }
 

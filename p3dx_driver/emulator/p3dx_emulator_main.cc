@@ -23,6 +23,7 @@
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
 
+#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "p3dx_driver/emulator/p3dx_emulator.h"
 #include "serial_io/pseudo_terminal.h"
 
@@ -63,8 +64,7 @@ nav_msgs::Odometry toMessage(const ekf_slam::Pose2& pose, double v, double w, ro
   message.child_frame_id = "emulated_base_link";
   message.pose.pose.position.x = pose.x;
   message.pose.pose.position.y = pose.y;
-  message.pose.pose.orientation.z = std::sin(pose.theta / 2.0);
-  message.pose.pose.orientation.w = std::cos(pose.theta / 2.0);
+  message.pose.pose.orientation = ekf_slam::ros_conversions::quaternionOfYaw(pose.theta);
   message.twist.twist.linear.x = v;
   message.twist.twist.angular.z = w;
   return message;

@@ -9,6 +9,8 @@
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt16.h>
 
+#include "ekf_slam_ros/conversions/pose_conversion.h"
+
 namespace p3dx {
 namespace {
 
@@ -115,7 +117,6 @@ void DriverNode::reportLinkChanges() {
 
 void DriverNode::publish(const OdometrySample& sample) {
   const ros::Time stamp = arrivalStamp(sample.arrival);
-  const double half = sample.pose.theta / 2.0;
 
   nav_msgs::Odometry odom;
   odom.header.stamp = stamp;
@@ -123,8 +124,7 @@ void DriverNode::publish(const OdometrySample& sample) {
   odom.child_frame_id = params_.base_frame;
   odom.pose.pose.position.x = sample.pose.x;
   odom.pose.pose.position.y = sample.pose.y;
-  odom.pose.pose.orientation.z = std::sin(half);
-  odom.pose.pose.orientation.w = std::cos(half);
+  odom.pose.pose.orientation = ekf_slam::ros_conversions::quaternionOfYaw(sample.pose.theta);
   const double position_variance = params_.position_variance_per_metre * sample.distance_travelled;
   odom.pose.covariance[0] = odom.pose.covariance[7] = position_variance;
   odom.pose.covariance[14] = odom.pose.covariance[21] = odom.pose.covariance[28] = kLargeVariance;
