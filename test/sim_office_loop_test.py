@@ -7,8 +7,8 @@ with tools/sim_monitor.py and asserts its acceptance figures:
   - average pose NEES reported with its two-sided 95 % band (computed for
     the number of independent samples the time-correlated series holds);
     asserted only below 10 (see the comment in the test: one run's band is
-    not a sound test; the item is judged over seeds by
-    tools/office_monte_carlo.sh, README "The pose NEES");
+    not a sound test; consistency is judged over seeds by
+    tools/office_monte_carlo.sh, docs/results.md "The pose NEES");
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
 and then replays the run's recording through offline.launch
@@ -64,8 +64,8 @@ class OfficeLoop(unittest.TestCase):
         self.assertGreater(r["odometry_mean_position_error"], 2.0 * r["mean_position_error"])
         # One run's pose NEES is a weak test: its errors are correlated over
         # the whole loop (3-50 independent samples), so single runs scatter
-        # from 0.6 to 15 over the seeds measured (README). The
-        # item is judged over seeds (tools/office_monte_carlo.sh, README
+        # from 0.6 to 15 over the seeds measured (docs/results.md). Consistency
+        # is judged over seeds (tools/office_monte_carlo.sh, docs/results.md
         # "The pose NEES"); here only a regression guard.
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])

@@ -13,8 +13,8 @@ Worlds:
                  robot can drive a loop and close it. Furniture square to
                  the walls.
   office_turned  the same with the cabinet in the top corridor and three
-                 desks turned against the raster (the office before
-                 2026-12-01: README, "The pose NEES").
+                 desks turned against the raster (the earlier office:
+                 docs/results.md, "The pose NEES").
 Each YAML carries `start_pose: [x, y, yaw]`, a free pose for the robot
 (map_server ignores the extra key).
 """
@@ -66,7 +66,7 @@ def office(turned=False):
     # viewpoint, which no real cabinet does: their sightings were 10-50 times
     # more often beyond the 99.9 % gate than any other's, and both loops lost
     # among 54 noise seeds lost their heading at the one that stood turned in
-    # the top corridor (README, "The pose NEES"). `turned` gives that earlier
+    # the top corridor (docs/results.md, "The pose NEES"). `turned` gives that earlier
     # world (office_turned), kept to reproduce it and to try remedies such
     # as features.point_model_sigma on; the carton layout is turned too.
     for x, y, w, h, a in [(0.4, 6.0, 0.5, 1.2, 0), (19.5, 4.0, 0.6, 0.8, 0),

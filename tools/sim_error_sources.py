@@ -4,7 +4,7 @@
 For recordings of the simulator (tools/office_monte_carlo.sh,
 sim_office_loop.test) and, for the sightings, their offline replays with
 --trace (ekf_slam_offline writes association_trace.txt), this prints the
-checks behind the consistency analysis in the README:
+checks behind the consistency analysis in docs/results.md:
 
   odometry   heading random walk of /odom against /ground_truth/odom, in
              rad^2 per metre driven (windows of 0.5 m or 0.5 rad), to set

@@ -74,7 +74,7 @@ struct FeatureOptions {
   // those errors do not average out over scans from one viewpoint. Added to
   // every point's covariance. Without it a corner seen at arm's length claims
   // millimetres and a few such sightings make the filter's heading
-  // overconfident (README, "The pose NEES"). 0: beam noise only (thesis).
+  // overconfident (docs/results.md, "The pose NEES"). 0: beam noise only (thesis).
   double point_model_sigma = 0.0;
 };
 

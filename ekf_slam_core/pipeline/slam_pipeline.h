@@ -61,7 +61,7 @@ struct PipelineOptions {
   // m: nearer point features are not used either. Close by, a landmark's
   // few centimetres of error are degrees of bearing, and the update's
   // first-order model turns them into heading error it does not account for
-  // (README, "the pose NEES"). 0: no limit.
+  // (docs/results.md, "the pose NEES"). 0: no limit.
   double min_landmark_range = 0.0;
   // Map management: a landmark matched fewer than prune_min_observations
   // times (its creation included) once prune_age_steps iterations old is

@@ -35,7 +35,7 @@ constexpr double kIntel500RotationThreshold = 0.6 * kPi / 180;  // rad
 // The simulator's file loads and differs from the defaults only where it
 // says: the motion noise (a random walk) and the control (raw odometry). The
 // extraction's point model is the shipped one: on the simulated office the
-// beam noise alone is consistent (README, "The pose NEES").
+// beam noise alone is consistent (docs/results.md, "The pose NEES").
 TEST(SlamConfig, SimulatorFileLoadsWithItsOwnMotionNoise) {
   SlamConfig sim, shipped;
   ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_sim.yaml", &sim), "");
@@ -376,7 +376,7 @@ TEST(RealLogs, IntelScansComeInFileOrderWithOdometry) {
 // Regression guard on real data: the first 500 scans of the Intel log with
 // the shipped configuration, scored on the relations that fall inside that
 // window. The threshold is the error measured when the test was written
-// (recorded in the README's accuracy table) plus a margin; a change that
+// (recorded in the accuracy table of docs/results.md) plus a margin; a change that
 // makes the result worse fails here.
 TEST(RealLogs, IntelFirst500ScansStayBelowTheRecordedRelationError) {
   const std::string data = kSource + "/../shared/datasets/";
