@@ -30,7 +30,7 @@ CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 all: build
 
 deps:
-	@tools/install_deps.sh
+	@tools/ci/install_deps.sh
 
 workspace:
 	@for d in ws bench_ws; do if [ -d $(ROOT)/.build/$$d ]; then \
@@ -45,16 +45,16 @@ build: deps workspace
 	@echo "build: ok ($(WS))"
 
 check:
-	@tools/check_core_ros_free.sh
-	@tools/check_format.sh
-	@tools/check_catkin_lint.sh
-	@tools/check_rosdep.sh
+	@tools/ci/check_core_ros_free.sh
+	@tools/ci/check_format.sh
+	@tools/ci/check_catkin_lint.sh
+	@tools/ci/check_rosdep.sh
 
 test: build check
-	@tools/run_tests.sh $(WS)
+	@tools/ci/run_tests.sh $(WS)
 
 demo: build
-	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/run_demo.sh $(OUT)
+	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/ci/run_demo.sh $(OUT)
 
 bench: deps
 	@mkdir -p $(BENCH_WS)/src $(OUT)/bench
@@ -62,7 +62,7 @@ bench: deps
 	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
-	@tools/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
+	@tools/ci/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
 
 # Offline SLAM on the real datasets in ../shared/datasets, scored with the
 # relation metric; results in output/benchmark/ (summary.md).
@@ -72,21 +72,21 @@ benchmark: deps
 	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
-	@tools/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
+	@tools/ci/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
 
 # libFuzzer campaign: every fuzz target (or those in FUZZ_TARGETS),
 # FUZZ_SECONDS each (FUZZ_RUNS inputs at most when set), clang with ASan +
 # UBSan over everything linked. Corpus, reproducers and summary.md in
 # output/fuzz/. The README's figures: make fuzz FUZZ_SECONDS=7200 FUZZ_RUNS=10000000
 fuzz:
-	@tools/install_deps.sh clang
+	@tools/ci/install_deps.sh clang
 	@mkdir -p $(FUZZ_WS)/src $(OUT)/fuzz
 	@if [ ! -e $(FUZZ_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(FUZZ_WS)/src/ekf_slam; fi
 	@cd $(FUZZ_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
 	  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DEKF_SLAM_FUZZ=ON \
 	  -DCATKIN_ENABLE_TESTING=OFF ekf_slam_fuzzers > $(FUZZ_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(FUZZ_WS)/build.log; exit 1; }
-	@tools/run_fuzzers.sh $(FUZZ_WS)/devel/lib/ekf_slam/fuzz $(OUT)/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS)
+	@tools/ci/run_fuzzers.sh $(FUZZ_WS)/devel/lib/ekf_slam/fuzz $(OUT)/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS)
 
 # Every gtest under AddressSanitizer + UBSan (any report fails the test),
 # with the executables the gtests run.
@@ -95,10 +95,10 @@ sanitize: deps
 	@if [ ! -e $(SAN_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(SAN_WS)/src/ekf_slam; fi
 	@cd $(SAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DEKF_SLAM_SANITIZE=ON tests ekf_slam_offline \
 	  > $(SAN_WS)/build.log 2>&1 || { tail -n 60 $(SAN_WS)/build.log; exit 1; }
-	@tools/run_sanitized_tests.sh $(SAN_WS) $(OUT)/sanitize
+	@tools/ci/run_sanitized_tests.sh $(SAN_WS) $(OUT)/sanitize
 
 format:
-	@tools/check_format.sh --fix
+	@tools/ci/check_format.sh --fix
 
 clean:
 	rm -rf $(ROOT)/.build $(CACHE)

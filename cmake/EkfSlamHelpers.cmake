@@ -48,7 +48,7 @@ endfunction()
 # libraries it links are instrumented by the same option. Every fuzzer is a
 # dependency of the target `ekf_slam_fuzzers`, and its seed corpus (a folder
 # of the source tree) is listed in devel/lib/ekf_slam/fuzz/fuzzers.txt, one
-# "<name> <corpus>" line each, for tools/run_fuzzers.sh.
+# "<name> <corpus>" line each, for tools/ci/run_fuzzers.sh.
 function(ekf_slam_add_fuzzer name)
   cmake_parse_arguments(ARG "" "CORPUS" "SOURCES;LIBS" ${ARGN})
   if(NOT EKF_SLAM_FUZZ)

@@ -2,7 +2,7 @@
 """Loop closure that does not depend on small drift (test/bent_loop.test).
 
 The ACES log's wheel odometry is bent by a constant heading bias
-(tools/bend_odometry.py, 1 deg per metre), so that the scan-matched track
+(tools/dev/bend_odometry.py, 1 deg per metre), so that the scan-matched track
 comes back more than 10 m from where it left. ekf_slam_offline runs, with
 the built-in configuration, on the bent and on the original log.
 

@@ -30,6 +30,8 @@ import rostest
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
+from ekf_slam_tools.trajectories import read_rows
+
 # The room (m): walls of a box and a square pillar, as segments.
 ROOM = [(-4.0, -3.0), (4.0, -3.0), (4.0, 3.0), (-4.0, 3.0)]
 PILLAR = [(1.3, 0.8), (1.7, 0.8), (1.7, 1.2), (1.3, 1.2)]
@@ -91,11 +93,6 @@ def write_box_room_bag(path, seconds=30.0):
                 scan.ranges = [cast(x, y, heading + scan.angle_min + i * scan.angle_increment, 8.0)
                                for i in range(181)]
                 bag.write("/scan", scan, stamp)
-
-
-def read_rows(path):
-    with open(path) as f:
-        return [line.split() for line in f if line.strip() and not line.startswith("#")]
 
 
 class InstallSpace(unittest.TestCase):
@@ -167,7 +164,7 @@ class InstallSpace(unittest.TestCase):
             rows = read_rows(os.path.join(out, name))
             self.assertGreater(len(rows), 100, name)
             for row in rows:
-                self.assertTrue(all(math.isfinite(float(v)) for v in row), name + ": " + str(row))
+                self.assertTrue(all(math.isfinite(v) for v in row), name + ": " + str(row))
         for name in ["map.pgm", "map.yaml", "landmarks.yaml"]:
             self.assertGreater(os.path.getsize(os.path.join(out, name)), 0, name)
         figures = [f for f in os.listdir(out) if f.endswith(".png")]

@@ -32,16 +32,10 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Path
 from tf2_msgs.msg import TFMessage
 
+from ekf_slam_tools.se2 import wrap, yaw_of
+
 POSITION_TOLERANCE = 0.01  # m: live and offline agree to this …
 HEADING_TOLERANCE = math.radians(0.1)  # … and this at every compared scan
-
-
-def yaw_of(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def wrap(a):
-    return math.atan2(math.sin(a), math.cos(a))
 
 
 class LiveLoopReplay(unittest.TestCase):

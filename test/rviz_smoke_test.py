@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """rviz under Xvfb with each shipped config (config/rviz/sim.rviz and
 robot.rviz) on the running simulated system (test/rviz_smoke.test):
-tools/rviz_screenshot.py must report rviz alive for the whole wait, no error
+tools/dev/rviz_screenshot.py must report rviz alive for the whole wait, no error
 line from rviz, and a screenshot that is not blank. The SLAM outputs are
 awaited first so that the displays have data to draw."""
 import os
@@ -30,7 +30,7 @@ class RvizSmoke(unittest.TestCase):
         if os.path.exists(out):
             os.unlink(out)
         result = subprocess.run(
-            ["/usr/bin/python3", os.path.join(root, "tools", "rviz_screenshot.py"), "--config",
+            ["/usr/bin/python3", os.path.join(root, "tools", "dev", "rviz_screenshot.py"), "--config",
              os.path.join(root, "config", "rviz", name), "--out", out, "--wait", "25"],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
         print(result.stdout)

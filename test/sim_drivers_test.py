@@ -28,25 +28,14 @@ from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool
 
+from ekf_slam_tools.se2 import compose, wrap, yaw_of
+
 EXPECTED_BEAMS = 181          # 180 deg at 1 deg (config/lms200.yaml)
 MIN_SCAN_RATE = 8.0           # Hz; 9.38 Hz expected at 38400 baud
 LASER_X = 0.160               # m, config/calibration.yaml
 GOAL_TOLERANCE = 0.15         # m, waypoint_driver default
 DRIFT_ALLOWANCE = 0.25        # m, odometry drift over one ~9 m lap with the default wheel noise
 ROBOT_RADIUS = 0.26           # m, config/simulator.yaml
-
-
-def yaw_of(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def wrap(angle):
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def compose(a, b):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))
 
 
 def between(a, b):

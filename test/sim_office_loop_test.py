@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Scores one simulated loop of the office world (test/sim_office_loop.test)
-with tools/sim_monitor.py and asserts its acceptance figures:
+with tools/dev/sim_monitor.py and asserts its acceptance figures:
   - final position error < 0.10 m and heading error < 2 deg; mean error
     over the loop < 0.12 m, while odometry alone is at least 2x farther off
     (mean error; its largest > 0.2 m);
@@ -8,33 +8,29 @@ with tools/sim_monitor.py and asserts its acceptance figures:
     the number of independent samples the time-correlated series holds);
     asserted only below 10 (see the comment in the test: one run's band is
     not a sound test; consistency is judged over seeds by
-    tools/office_monte_carlo.sh, docs/results.md "The pose NEES");
+    tools/dev/office_monte_carlo.sh, docs/results.md "The pose NEES");
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
 and then replays the run's recording through offline.launch
-(sim_replay_test.pause_and_replay): the offline outputs exist and the run is
+(ekf_slam_tools.sim_replay.pause_and_replay): the offline outputs exist and the run is
 reproduced (same landmarks, final pose within 1 cm), and the smoothed
 trajectory (the full smoother) is at least as close to the truth as the
 filtered one.
 """
+import argparse
 import os
 import sys
 import unittest
 
-import rospkg
 import rostest
 
-ROOT = rospkg.RosPack().get_path("ekf_slam")
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-sys.path.insert(0, os.path.join(ROOT, "test"))
-import sim_monitor  # noqa: E402
-import sim_replay_test  # noqa: E402
+from ekf_slam_tools import sim_monitor, sim_replay
 
 
 class OfficeLoop(unittest.TestCase):
     def test_loop_against_ground_truth(self):
         argv = [a for a in sys.argv[1:] if not a.startswith("__") and not a.startswith("--gtest")]
-        parser = sim_monitor.argparse.ArgumentParser()
+        parser = argparse.ArgumentParser()
         parser.add_argument("--out", required=True)
         parser.add_argument("--world", default="office")
         parser.add_argument("--timeout", type=float, default=800.0)
@@ -65,14 +61,14 @@ class OfficeLoop(unittest.TestCase):
         # One run's pose NEES is a weak test: its errors are correlated over
         # the whole loop (3-50 independent samples), so single runs scatter
         # from 0.6 to 15 over the seeds measured (docs/results.md). Consistency
-        # is judged over seeds (tools/office_monte_carlo.sh, docs/results.md
+        # is judged over seeds (tools/dev/office_monte_carlo.sh, docs/results.md
         # "The pose NEES"); here only a regression guard.
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)
 
         bag = argv[argv.index("--bag") + 1]
-        replay = sim_replay_test.pause_and_replay(self, os.path.join(args.out, "replay"),
+        replay = sim_replay.pause_and_replay(self, os.path.join(args.out, "replay"),
                                                   "/office_loop_recorder", bag,
                                                   wait_for_done=False)
         self.assertEqual(replay["offline_landmarks"], replay["live_landmarks"])
@@ -90,7 +86,7 @@ class OfficeLoop(unittest.TestCase):
               "position error" % (replay["smoothed_error"], replay["rts_error"],
                                   replay["filtered_error"]))
         self.assertLessEqual(replay["smoothed_error"],
-                             replay["filtered_error"] + sim_replay_test.SMOOTHED_TOLERANCE)
+                             replay["filtered_error"] + sim_replay.SMOOTHED_TOLERANCE)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 // scan_features_dump BAG INDEX [TOPIC]
 // Extracts features from scan number INDEX (0-based, file order) of a bag
 // with the default FeatureOptions and prints them as plain text for
-// tools/plot_scan_features.py. All coordinates in the laser frame (m, rad):
+// tools/analysis/plot_scan_features.py. All coordinates in the laser frame (m, rad):
 //   scan <index> <stamp> <beams> <valid>
 //   point <beam> <x> <y> <cluster>
 //   line <p> <theta> <x0> <y0> <x1> <y1> <var_p> <cov_p_theta> <var_theta>

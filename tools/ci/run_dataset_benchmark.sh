@@ -15,10 +15,15 @@
 # usage: [DATASETS="intel aces"] [CONFIG=file.yaml] run_dataset_benchmark.sh DEVEL_DIR [OUT_DIR]
 set -euo pipefail
 devel=${1:?usage: run_dataset_benchmark.sh DEVEL_DIR [OUT_DIR]}
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 out=${2:-$root/output/benchmark}
 data=${DATA_DIR:-$root/../shared/datasets}
 bin=$devel/lib/ekf_slam
+# The figures' script imports the package's Python tools (ekf_slam_tools).
+set +u
+# shellcheck disable=SC1091
+source "$devel/setup.bash"
+set -u
 if [ ! -d "$data" ]; then
   echo "run_dataset_benchmark: $data not found (the datasets live beside the repository); nothing to do" >&2
   exit 0

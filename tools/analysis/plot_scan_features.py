@@ -4,7 +4,7 @@
 Input is the text written by the scan_features_dump tool (ekf_slam_ros):
 
     rosrun ekf_slam scan_features_dump ../shared/datasets/intel.orig.bag 1200 > scan.txt
-    /usr/bin/python3 tools/plot_scan_features.py scan.txt output/scan_features.png
+    /usr/bin/python3 tools/analysis/plot_scan_features.py scan.txt output/scan_features.png
 
 Everything is drawn in the laser frame (x forward, y left, metres): readings
 coloured by cluster, lines in black, corners as red squares, segment ends

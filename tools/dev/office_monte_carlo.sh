@@ -2,7 +2,7 @@
 # Consistency of the whole simulated system over several noise draws: one
 # office loop per seed through sim.launch (simulator, the real drivers on
 # pseudo-terminals, the SLAM node), each recorded to a bag, then every bag
-# replayed offline (tools/replay_consistency.py) with the simulator's SLAM
+# replayed offline (tools/analysis/replay_consistency.py) with the simulator's SLAM
 # configuration, with the same configuration but first-estimates Jacobians
 # off, and with features.point_model_sigma 0 (when the configuration has
 # another value), printing the pose NEES and the position error per run and
@@ -17,7 +17,7 @@
 set -euo pipefail
 out=$(mkdir -p "${1:?usage: office_monte_carlo.sh OUT_DIR [SEEDS]}" && cd "$1" && pwd)
 seeds=${2:-1 2 3 4 5}
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 config=$root/config/ekf_slam_sim.yaml
 bags=()
 failed=()
@@ -35,7 +35,7 @@ for seed in $seeds; do
     __name:=mc_recorder > /dev/null 2>&1 &
   recorder_pid=$!
   status=0
-  /usr/bin/python3 "$root/tools/sim_monitor.py" --out "$dir" --world office --timeout 900 \
+  /usr/bin/python3 "$root/tools/dev/sim_monitor.py" --out "$dir" --world office --timeout 900 \
     --resume-after-recorder /mc_recorder > "$dir/monitor.log" 2>&1 || status=$?
   kill -INT "$recorder_pid" 2>/dev/null || true
   wait "$recorder_pid" 2>/dev/null || true
@@ -58,15 +58,15 @@ fi
 sed 's/first_estimate_jacobians: true/first_estimate_jacobians: false/' "$config" > "$out/standard_jacobians.yaml"
 sed 's/point_model_sigma: [0-9.]*/point_model_sigma: 0.0/' "$config" > "$out/beam_noise_only.yaml"
 echo "== replayed with config/ekf_slam_sim.yaml"
-/usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay" --config "$config"
+/usr/bin/python3 "$root/tools/analysis/replay_consistency.py" "${bags[@]}" --out "$out/replay" --config "$config"
 echo "== the same with first_estimate_jacobians: false"
-/usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay_standard" \
+/usr/bin/python3 "$root/tools/analysis/replay_consistency.py" "${bags[@]}" --out "$out/replay_standard" \
   --config "$out/standard_jacobians.yaml"
 if cmp -s "$config" "$out/beam_noise_only.yaml"; then
   echo "== (the configuration already has features.point_model_sigma: 0; not replayed again)"
 else
   echo "== the same with features.point_model_sigma: 0 (beam noise only)"
-  /usr/bin/python3 "$root/tools/replay_consistency.py" "${bags[@]}" --out "$out/replay_beam_noise_only" \
+  /usr/bin/python3 "$root/tools/analysis/replay_consistency.py" "${bags[@]}" --out "$out/replay_beam_noise_only" \
     --config "$out/beam_noise_only.yaml"
 fi
 if [ ${#failed[@]} -gt 0 ]; then

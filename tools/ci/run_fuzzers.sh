@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every libFuzzer target listed in FUZZ_DIR/fuzzers.txt (written by the
 # -DEKF_SLAM_FUZZ=ON build) and writes a summary table.
-#   tools/run_fuzzers.sh FUZZ_DIR OUT_DIR [SECONDS] [RUNS]
+#   tools/ci/run_fuzzers.sh FUZZ_DIR OUT_DIR [SECONDS] [RUNS]
 # SECONDS (default 60) bounds each target's time; RUNS (default unbounded),
 # when given, its number of inputs (libFuzzer -runs). The working corpus
 # starts from the seeds in the repository (test/fuzz_corpus/<target>) and is
@@ -14,7 +14,7 @@ fuzz_dir=${1:?usage: run_fuzzers.sh FUZZ_DIR OUT_DIR [SECONDS] [RUNS]}
 out=${2:?usage: run_fuzzers.sh FUZZ_DIR OUT_DIR [SECONDS] [RUNS]}
 seconds=${3:-60}
 runs=${4:-}
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 list=$fuzz_dir/fuzzers.txt
 if [ ! -f "$list" ]; then
   echo "run_fuzzers: $list not found (build with -DEKF_SLAM_FUZZ=ON first)" >&2

@@ -18,27 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
-
-
-def read_pgm(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    # Header: magic, optional comments, width height, maxval, then bytes.
-    fields, pos = [], 0
-    while len(fields) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
-            continue
-        end = pos
-        while not data[end:end + 1].isspace():
-            end += 1
-        fields.append(data[pos:end])
-        pos = end
-    pos += 1
-    width, height = int(fields[1]), int(fields[2])
-    return np.frombuffer(data[pos:pos + width * height], dtype=np.uint8).reshape(height, width)
+from ekf_slam_tools.worlds import read_pgm  # noqa: E402
 
 
 def show_map(ax, out_dir, base, title):

@@ -11,19 +11,19 @@
 #     source tree; the scripts a program starts are installed beside it
 #     (ekf_slam_add_program_script).
 set -uo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 if ! command -v catkin_lint > /dev/null; then
-  echo "check_catkin_lint: catkin_lint not installed (tools/install_deps.sh installs catkin-lint)" >&2
+  echo "check_catkin_lint: catkin_lint not installed (tools/ci/install_deps.sh installs catkin-lint)" >&2
   exit 1
 fi
-# With the rosdep database (tools/rosdep_env.sh) catkin_lint also checks that
+# With the rosdep database (tools/ci/rosdep_env.sh) catkin_lint also checks that
 # every dependency is a known key; without python3-rosdep2 it cannot.
 rosdep_args=()
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-# shellcheck source=tools/rosdep_env.sh
-source "$root/tools/rosdep_env.sh"
+# shellcheck source=tools/ci/rosdep_env.sh
+source "$root/tools/ci/rosdep_env.sh"
 if command -v rosdep > /dev/null && rosdep_env "$tmp" 2> /dev/null; then
   rosdep_args=(--rosdistro debian)
 else

@@ -15,7 +15,7 @@ and prints a summary: RSS after the warm-up and at the end.
 
 usage (after make build, with the workspace sourced):
   source .build/setup.bash
-  tools/live_soak.py --minutes 30 --out output/soak
+  tools/dev/live_soak.py --minutes 30 --out output/soak
 """
 import argparse
 import os

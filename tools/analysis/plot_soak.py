@@ -1,8 +1,8 @@
 #!/usr/bin/python3
-"""Plots the soak runs: the filter soak (tools/filter_soak.cc) and the live
-soak (tools/live_soak.py).
+"""Plots the soak runs: the filter soak (tools/dev/filter_soak.cc) and the live
+soak (tools/dev/live_soak.py).
 
-usage: tools/plot_soak.py --filter output/soak/filter_soak.txt \
+usage: tools/analysis/plot_soak.py --filter output/soak/filter_soak.txt \
                           --live output/soak/live_soak.txt --out docs/images/soak.png
 Either input may be left out.
 """

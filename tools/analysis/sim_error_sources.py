@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Where a simulated run's errors come from, measured against the truth.
 
-For recordings of the simulator (tools/office_monte_carlo.sh,
+For recordings of the simulator (tools/dev/office_monte_carlo.sh,
 sim_office_loop.test) and, for the sightings, their offline replays with
 --trace (ekf_slam_offline writes association_trace.txt), this prints the
 checks behind the consistency analysis in docs/results.md:
@@ -45,7 +45,7 @@ import sys
 import numpy as np
 import rosbag
 
-import sim_monitor
+from ekf_slam_tools import se2, worlds
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 LASER_X = 0.16  # m, config/calibration.yaml (the simulator's mount)
@@ -57,7 +57,7 @@ def read_poses(bag_path, topic):
     with rosbag.Bag(bag_path) as bag:
         for _, msg, _ in bag.read_messages(topics=[topic]):
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            yaw = se2.yaw_of(q)
             out.append((msg.header.stamp.to_sec(), p.x, p.y, yaw))
     out.sort()
     return out
@@ -67,14 +67,14 @@ def odometry_walk(pairs):
     """(path, turn, heading-error change) per window over all bags."""
     rows = []
     for odom, truth in pairs:
-        samples = [(o, sim_monitor.interpolate(truth, o[0])) for o in odom]
+        samples = [(o, se2.interpolate(truth, o[0])) for o in odom]
         samples = [(o, t) for o, t in samples if t is not None]
         # interpolate() gives (x, y, theta)
         error = np.unwrap([o[3] - t[2] for o, t in samples])
         path, turn = [0.0], [0.0]
         for (_, a), (_, b) in zip(samples, samples[1:]):
             path.append(path[-1] + math.hypot(b[0] - a[0], b[1] - a[1]))
-            turn.append(turn[-1] + abs(sim_monitor.wrap(b[2] - a[2])))
+            turn.append(turn[-1] + abs(se2.wrap(b[2] - a[2])))
         i = 0
         for j in range(1, len(samples)):
             if path[j] - path[i] >= 0.5 or turn[j] - turn[i] >= 0.5:
@@ -101,7 +101,7 @@ class RasterWorld:
     """The simulator's world image: occupied cells, ray casting and corners."""
 
     def __init__(self, world_yaml):
-        self.occupied, self.res, self.ox, self.oy = sim_monitor.read_world_grid(world_yaml)
+        self.occupied, self.res, self.ox, self.oy = worlds.read_world_grid(world_yaml)
         self.steps = np.arange(0.02, 8.0, 0.005)
 
     def cast(self, x, y, angles):
@@ -147,11 +147,11 @@ def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_ra
             if k % 4:
                 continue
             stamp = msg.header.stamp.to_sec()
-            before = sim_monitor.interpolate(truth, stamp - 0.1)
-            after = sim_monitor.interpolate(truth, stamp + 0.1)
+            before = se2.interpolate(truth, stamp - 0.1)
+            after = se2.interpolate(truth, stamp + 0.1)
             if before is None or after is None:
                 continue
-            rate = abs(sim_monitor.wrap(after[2] - before[2])) / 0.2
+            rate = abs(se2.wrap(after[2] - before[2])) / 0.2
             if rate <= turning_rate and k % every:
                 continue
             ranges = np.array(msg.ranges)
@@ -166,7 +166,7 @@ def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_ra
                 return cache[(shift, offset)]
 
             def cast_residual(shift, offset):
-                pose = sim_monitor.interpolate(truth, stamp + shift)
+                pose = se2.interpolate(truth, stamp + shift)
                 if pose is None:
                     return None
                 lx = pose[0] + LASER_X * math.cos(pose[2])
@@ -194,13 +194,11 @@ def scan_residuals(bag_path, truth, world, shifts, offsets, every=12, turning_ra
 
 def turned_segments(world_yaml):
     """The world's segments that are neither horizontal nor vertical (objects
-    turned against the raster), from tools/make_worlds.py; [] if unknown."""
-    sys.path.insert(0, HERE)
-    import make_worlds  # noqa: E402  (the generator of config/worlds)
+    turned against the raster), from ekf_slam_tools.worlds; [] if unknown."""
     name = os.path.splitext(os.path.basename(world_yaml))[0]
-    if not hasattr(make_worlds, name):
+    if name not in worlds.WORLDS:
         return []
-    return [(a, b) for a, b in getattr(make_worlds, name)()[0]
+    return [(a, b) for a, b in worlds.WORLDS[name]()[0]
             if abs(a[0] - b[0]) > 1e-9 and abs(a[1] - b[1]) > 1e-9]
 
 
@@ -228,7 +226,7 @@ def matched_sightings(truth, run):
             if v[6] != "matched":
                 continue
             stamp, r, b = float(v[0]), float(v[4]), float(v[5])
-            pose = sim_monitor.interpolate(truth, stamp)
+            pose = se2.interpolate(truth, stamp)
             if pose is None:
                 continue
             a = pose[2] + b
@@ -318,7 +316,7 @@ def main():
     parser.add_argument("--bag", action="append", required=True)
     parser.add_argument("--run", action="append", default=[],
                         help="offline replay of the bag before it, made with --trace")
-    parser.add_argument("--world", default=os.path.join(HERE, "..", "config", "worlds",
+    parser.add_argument("--world", default=os.path.join(HERE, "..", "..", "config", "worlds",
                                                         "office.yaml"))
     parser.add_argument("--scans", action="store_true",
                         help="ray-cast the world at the true pose (slow): stamp shift, bearing "

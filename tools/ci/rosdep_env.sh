@@ -1,4 +1,4 @@
-# Sourced by tools/check_rosdep.sh and tools/check_catkin_lint.sh:
+# Sourced by tools/ci/check_rosdep.sh and tools/ci/check_catkin_lint.sh:
 #   rosdep_env DIR
 # points rosdep (and catkin_lint) at a private cache in DIR built from
 # Debian's own rosdep database (python3-rosdep2; the ROS keys) and
@@ -8,7 +8,7 @@
 # rosdep's output on stderr, when the cache cannot be built.
 rosdep_env() {
   local dir=$1 root
-  root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+  root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
   mkdir -p "$dir/sources.list.d"
   echo "yaml file://$root/rosdep/debian.yaml" > "$dir/sources.list.d/10-ekf_slam.list"
   echo "yaml file:///usr/share/python3-rosdep2/debian.yaml" > "$dir/sources.list.d/20-debian.list"

@@ -2,7 +2,7 @@
 # make demo: one loop of the office world through the whole system
 # (sim.launch: simulator, the real drivers on pseudo-terminals, feature and
 # SLAM nodes, the waypoint driver on the SLAM pose), scored against the
-# simulator's ground truth by tools/sim_monitor.py. Results in $1 (default
+# simulator's ground truth by tools/dev/sim_monitor.py. Results in $1 (default
 # output/): report.txt, demo.png, trajectory_{slam,odometry,true}.txt,
 # landmarks.yaml. RVIZ=1 opens rviz on the run.
 #
@@ -11,7 +11,7 @@
 # setup.bash to be sourced (the Makefile does).
 set -euo pipefail
 out=$(mkdir -p "${1:-output}" && cd "${1:-output}" && pwd)
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 rviz=$([ "${RVIZ:-0}" = "1" ] && echo true || echo false)
 port=${DEMO_ROS_PORT:-11471}
 export ROS_MASTER_URI=http://localhost:$port
@@ -26,7 +26,7 @@ launch_pid=$!
 cleanup() { kill -INT "$launch_pid" 2>/dev/null || true; wait "$launch_pid" 2>/dev/null || true; }
 trap cleanup EXIT
 status=0
-/usr/bin/python3 "$root/tools/sim_monitor.py" --out "$out" --world office --timeout 900 || status=$?
+/usr/bin/python3 "$root/tools/dev/sim_monitor.py" --out "$out" --world office --timeout 900 || status=$?
 if [ $status -ne 0 ]; then
   echo "run_demo: the run did not complete; the launch log is $log" >&2
   tail -n 30 "$log" >&2

@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Watches a simulated SLAM run (sim.launch) and scores it against the
 simulator's ground truth: used by `make demo` (writes output/) and by the
 office-loop rostest (test/sim_office_loop.test asserts on the same numbers).
@@ -31,125 +30,11 @@ import sys
 import time
 
 import numpy as np
+import rospkg
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-# --- SE(2) helpers on (x, y, theta) tuples ---------------------------------
-def wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def compose(a, b):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))
-
-
-def inverse(a):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (-c * a[0] - s * a[1], s * a[0] - c * a[1], wrap(-a[2]))
-
-
-def transform_point(a, p):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * p[0] - s * p[1], a[1] + s * p[0] + c * p[1])
-
-
-def interpolate(track, t):
-    """Pose of a time-sorted [(t, x, y, th)] track at t (None outside it)."""
-    if not track or t < track[0][0] or t > track[-1][0]:
-        return None
-    lo, hi = 0, len(track) - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if track[mid][0] <= t:
-            lo = mid
-        else:
-            hi = mid
-    a, b = track[lo], track[hi]
-    if b[0] == a[0]:
-        return a[1:4]
-    f = (t - a[0]) / (b[0] - a[0])
-    return (a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]), wrap(a[3] + f * wrap(b[3] - a[3])))
-
-
-# --- statistics -------------------------------------------------------------
-def chi2_quantile(p, dof):
-    """Wilson-Hilferty approximation of the chi-square quantile (good to
-    ~1 % for dof >= 3, plenty for a band)."""
-    # Standard normal quantile by bisection on erf.
-    lo, hi = -10.0, 10.0
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        if 0.5 * (1.0 + math.erf(mid / math.sqrt(2.0))) < p:
-            lo = mid
-        else:
-            hi = mid
-    z = 0.5 * (lo + hi)
-    k = float(dof)
-    return k * (1.0 - 2.0 / (9.0 * k) + z * math.sqrt(2.0 / (9.0 * k))) ** 3
-
-
-def effective_samples(values):
-    """N / (1 + 2 sum of autocorrelations up to the first negative one): the
-    number of independent samples a time-correlated series is worth."""
-    x = np.asarray(values, dtype=float)
-    n = len(x)
-    if n < 4:
-        return float(n)
-    x = x - x.mean()
-    var = float(np.dot(x, x)) / n
-    if var <= 0.0:
-        return float(n)
-    tau = 1.0
-    for lag in range(1, n // 2):
-        rho = float(np.dot(x[:-lag], x[lag:])) / (n * var)
-        if rho <= 0.0:
-            break
-        tau += 2.0 * rho
-    return max(1.0, n / tau)
-
-
-def nees_band(dof, samples, confidence=0.95):
-    """Two-sided band of the average of `samples` independent chi-square(dof)
-    values."""
-    total = dof * samples
-    alpha = 1.0 - confidence
-    return (chi2_quantile(alpha / 2.0, total) / samples,
-            chi2_quantile(1.0 - alpha / 2.0, total) / samples)
-
-
-# --- world truth ---------------------------------------------------------------
-def world_vertices(world):
-    """Corners of the world's polygons (world frame), from tools/make_worlds.py."""
-    sys.path.insert(0, HERE)
-    import make_worlds  # noqa: E402  (the generator of config/worlds)
-    segments = getattr(make_worlds, world)()[0]
-    vertices = set()
-    for a, b in segments:
-        vertices.add((round(a[0], 3), round(a[1], 3)))
-        vertices.add((round(b[0], 3), round(b[1], 3)))
-    return sorted(vertices)
-
-
-def read_world_grid(yaml_path):
-    """A map_server world as (occupied, resolution, origin x, origin y):
-    occupied[row, col] is True for a wall cell, row 0 at the bottom (y =
-    origin y), so cell (row, col) spans x = ox + col * res, y = oy + row * res."""
-    import yaml
-    with open(yaml_path) as f:
-        meta = yaml.safe_load(f)
-    sys.path.insert(0, HERE)
-    from plot_offline import read_pgm  # noqa: E402  (the project's PGM reader)
-    pixels = read_pgm(os.path.join(os.path.dirname(yaml_path), meta["image"]))
-    return (pixels < 128)[::-1, :], float(meta["resolution"]), meta["origin"][0], meta["origin"][1]
-
-
-def read_world_image(yaml_path):
-    """Occupied cell centres (world frame) of a map_server world."""
-    occupied, res, ox, oy = read_world_grid(yaml_path)
-    rows, cols = np.nonzero(occupied)
-    return ox + (cols + 0.5) * res, oy + (rows + 0.5) * res
+from ekf_slam_tools.se2 import compose, interpolate, inverse, transform_point, wrap
+from ekf_slam_tools.stats import effective_samples, nees_band
+from ekf_slam_tools.worlds import read_world_image, world_vertices
 
 
 # --- scoring ------------------------------------------------------------------
@@ -466,7 +351,8 @@ def run(args):
     result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
                    world_vertices(args.world))
     result["ended_early"] = ended_early
-    world_yaml = os.path.join(HERE, "..", "config", "worlds", args.world + ".yaml")
+    world_yaml = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "worlds",
+                              args.world + ".yaml")
     write_outputs(args.out, result, landmarks, world_yaml)
     return result
 
@@ -485,6 +371,3 @@ def main():
     result = run(args)
     sys.stdout.write(report_text(result))
 
-
-if __name__ == "__main__":
-    main()

@@ -2,7 +2,7 @@
 # Runs every gtest of a workspace built with -DEKF_SLAM_SANITIZE=ON (ASan +
 # UBSan, `make sanitize`) and writes a summary. Any sanitizer report makes
 # its test fail (halt_on_error), and so the script exit 1.
-#   tools/run_sanitized_tests.sh WS OUT_DIR
+#   tools/ci/run_sanitized_tests.sh WS OUT_DIR
 set -u
 ws=${1:?usage: run_sanitized_tests.sh WS OUT_DIR}
 out=${2:?usage: run_sanitized_tests.sh WS OUT_DIR}

@@ -16,9 +16,7 @@ import sys
 
 import rosbag
 
-
-def yaw_of(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+from ekf_slam_tools.se2 import yaw_of
 
 
 def set_yaw(q, yaw):

@@ -3,7 +3,7 @@
 # summary line. Exit code non-zero on any failure.
 set -o pipefail
 ws=${1:?usage: run_tests.sh WORKSPACE}
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 results="$ws/build/test_results"
 rm -rf "$results"
 # shellcheck disable=SC1091
@@ -17,7 +17,7 @@ if [ $status -ne 0 ]; then
   echo "run_tests: 'catkin_make run_tests' exited with $status; log: $ws/run_tests.log" >&2
   tail -n 30 "$ws/run_tests.log" >&2
 fi
-/usr/bin/python3 "$root/tools/test_summary.py" "$results"
+/usr/bin/python3 "$root/tools/ci/test_summary.py" "$results"
 summary=$?
 [ $status -ne 0 ] && exit $status
 exit $summary

@@ -15,7 +15,7 @@ on the wall clock:
 
 usage (after make build, with the workspace sourced):
   source .build/setup.bash
-  tools/realtime_replay.py [--bag ../shared/datasets/intel.orig.bag] [--rate 5] [--core 0]
+  tools/dev/realtime_replay.py [--bag ../shared/datasets/intel.orig.bag] [--rate 5] [--core 0]
 """
 import argparse
 import math
@@ -80,7 +80,7 @@ class Probe:
 
 
 def main():
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--bag", default=os.path.join(root, "..", "shared", "datasets",
                                                       "intel.orig.bag"))

@@ -7,7 +7,7 @@ can be replayed through ekf_slam_offline in seconds, deterministically, and
 with different configurations. This script scores such a replay:
 trajectory_filtered.txt and covariance_filtered.txt of the run against the
 bag's /ground_truth/odom (map frame = the truth at the first scan, as
-sim_monitor.py does), with the same 2 mm / 1 mrad truth allowance.
+the monitor, ekf_slam_tools.sim_monitor, does), with the same 2 mm / 1 mrad truth allowance.
 
 usage:
   replay_consistency.py --bag BAG [--bag BAG2 ...] --out DIR [--config YAML] [--runner EXE]
@@ -20,7 +20,7 @@ Prints, per run, the average pose NEES with its 95 % band for the effective
 number of independent samples, the rms normalised error per axis (1.0
 when the filter's sigma fits its errors) and the position error (mean,
 largest, final), so that a change bought with accuracy shows. With several bags (recordings
-with different noise seeds: tools/office_monte_carlo.sh) it also prints the
+with different noise seeds: tools/dev/office_monte_carlo.sh) it also prints the
 Monte Carlo figure: the NEES averaged over all runs against the band for
 the runs' effective samples together. One run holds only ~5-30
 independent samples (its errors are correlated over the whole loop), so
@@ -36,7 +36,9 @@ import sys
 import numpy as np
 import rosbag
 
-import sim_monitor
+from ekf_slam_tools import se2, stats
+from ekf_slam_tools.sim_monitor import TRUTH_SIGMA
+from ekf_slam_tools.trajectories import rows_by_stamp
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -46,50 +48,36 @@ def read_truth(bag_path):
     with rosbag.Bag(bag_path) as bag:
         for _, msg, _ in bag.read_messages(topics=["/ground_truth/odom"]):
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-            truth.append((msg.header.stamp.to_sec(), p.x, p.y, yaw))
+            truth.append((msg.header.stamp.to_sec(), p.x, p.y, se2.yaw_of(q)))
     truth.sort()
     if len(truth) < 2:
         raise RuntimeError("%s has no /ground_truth/odom (not a simulator recording?)" % bag_path)
     return truth
 
 
-def read_rows(path, columns):
-    rows = {}
-    with open(path) as f:
-        for line in f:
-            if line.strip() and not line.startswith("#"):
-                values = [float(v) for v in line.split()]
-                if len(values) != columns:
-                    raise RuntimeError("%s: expected %d columns, got %d" %
-                                       (path, columns, len(values)))
-                rows[round(values[0], 6)] = values
-    return rows
-
-
 def score(truth, run_dir):
-    poses = read_rows(os.path.join(run_dir, "trajectory_filtered.txt"), 4)
-    covariances = read_rows(os.path.join(run_dir, "covariance_filtered.txt"), 7)
+    poses = rows_by_stamp(os.path.join(run_dir, "trajectory_filtered.txt"), 4)
+    covariances = rows_by_stamp(os.path.join(run_dir, "covariance_filtered.txt"), 7)
     stamps = sorted(s for s in poses if s in covariances and
-                    sim_monitor.interpolate(truth, s) is not None)
+                    se2.interpolate(truth, s) is not None)
     if len(stamps) < 2:
         raise RuntimeError("%s: fewer than 2 scans overlap the ground truth" % run_dir)
     first = poses[stamps[0]][1:4]
-    map_world = sim_monitor.inverse(
-        sim_monitor.compose(sim_monitor.interpolate(truth, stamps[0]), sim_monitor.inverse(first)))
-    allowance = np.diag(np.square(sim_monitor.TRUTH_SIGMA))
+    map_world = se2.inverse(
+        se2.compose(se2.interpolate(truth, stamps[0]), se2.inverse(first)))
+    allowance = np.diag(np.square(TRUTH_SIGMA))
     nees, normalised, distances = [], [], []
     for s in stamps:
         est = poses[s][1:4]
-        true = sim_monitor.compose(map_world, sim_monitor.interpolate(truth, s))
-        e = np.array([est[0] - true[0], est[1] - true[1], sim_monitor.wrap(est[2] - true[2])])
+        true = se2.compose(map_world, se2.interpolate(truth, s))
+        e = np.array([est[0] - true[0], est[1] - true[1], se2.wrap(est[2] - true[2])])
         distances.append(math.hypot(e[0], e[1]))
         c = covariances[s][1:]
         cov = np.array([[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]]) + allowance
         nees.append(float(e @ np.linalg.solve(cov, e)))
         normalised.append(e / np.sqrt(np.diag(cov)))
-    samples = sim_monitor.effective_samples(nees)
-    band = sim_monitor.nees_band(3, max(1, int(round(samples))))
+    samples = stats.effective_samples(nees)
+    band = stats.nees_band(3, max(1, int(round(samples))))
     rms = np.sqrt(np.mean(np.square(normalised), axis=0))
     errors = (float(np.mean(distances)), max(distances), distances[-1])
     return np.mean(nees), len(nees), samples, band, rms, errors
@@ -99,7 +87,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--bag", required=True, action="append", help="repeat for several runs")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--config", default=os.path.join(HERE, "..", "config", "ekf_slam_sim.yaml"))
+    parser.add_argument("--config", default=os.path.join(HERE, "..", "..", "config", "ekf_slam_sim.yaml"))
     parser.add_argument("--runner", default="ekf_slam_offline",
                         help="path of ekf_slam_offline (default: found by rosrun)")
     parser.add_argument("--no-run", action="store_true")
@@ -134,7 +122,7 @@ def main():
         # (equal to the total sample count only when every n_i is the same; a
         # run with few independent samples widens the band, as it should).
         equivalent = len(means) ** 2 / inverse_samples
-        band = sim_monitor.nees_band(3, max(1, int(round(equivalent))))
+        band = stats.nees_band(3, max(1, int(round(equivalent))))
         inside = band[0] <= pooled <= band[1]
         print("Monte Carlo over %d runs: average pose NEES %.2f (worth %.0f independent "
               "samples), 95%% band %.2f..%.2f: %s" % (len(means), pooled, equivalent, band[0],

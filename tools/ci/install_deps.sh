@@ -18,7 +18,7 @@ PACKAGES=(
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-nav-msgs
   python3-sensor-msgs python3-diagnostic-msgs python3-tf2-msgs
   # … and the rest of what package.xml's keys resolve to in Debian's rosdep
-  # database (tools/check_rosdep.sh holds the two lists equal)
+  # database (tools/ci/check_rosdep.sh holds the two lists equal)
   python3-visualization-msgs python3-diagnostic-updater python3-tf2 python3-tf2-ros
   python3-tf2-geometry-msgs ros-tf2-msgs python3-roslaunch python3-rostopic python3-rosunit
   python3-rosdep2
