@@ -247,6 +247,9 @@ std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser
     const double a = scan.angle(i);
     const Vector2 p = transformFrom(
         laser_pose, Vector2(scan.ranges[i] * std::cos(a), scan.ranges[i] * std::sin(a)));
+    // A beam whose bearing is not finite (angle_min + i · angle_increment
+    // beyond the range of a double) has no place.
+    if (!p.allFinite()) continue;
     if (!out.empty() && (p - out.back()).squaredNorm() < spacing2) continue;
     out.push_back(p);
   }

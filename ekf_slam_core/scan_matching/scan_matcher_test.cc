@@ -260,5 +260,32 @@ TEST(ScanMatcherOptions, ValidationNamesTheBadField) {
   EXPECT_NE(o.validate().find("odometry_gate_probability"), std::string::npos);
 }
 
+// A sweep whose bearings overflow (angle_increment 1e308: from beam 2 on the
+// bearing lies beyond the range of a double) passes the scan's geometry
+// check, but its beams have no direction: they give no point, and matching
+// against them neither crashes nor moves the guess to NaN.
+TEST(ScanMatcher, BeamsWithoutAFiniteBearingGiveNoPoints) {
+  const ScanMatcherOptions options;
+  Scan scan;
+  scan.angle_min = -1.0;
+  scan.angle_increment = 1e308;
+  scan.range_min = 0.0;
+  scan.range_max = 80.0;
+  scan.ranges.assign(50, 3.0);
+  ASSERT_EQ(validateScan(scan), "");
+  const std::vector<Vector2> points = scanPointsInRobotFrame(scan, Pose2(0.1, 0.0, 0.0), options);
+  ASSERT_EQ(points.size(), 2u) << "only beams 0 and 1 have a finite bearing";
+  for (const Vector2& p : points) EXPECT_TRUE(p.allFinite());
+
+  std::mt19937 rng(3);
+  const Pose2 laser(0.1, 0.0, 0.0);
+  ScanMatchingOdometry odometry(options, MotionNoiseOptions());
+  odometry.process(sweep(room(), Pose2(), laser, &rng), Pose2(), laser, nullptr);
+  MatchResult match;
+  const Pose2 pose = odometry.process(scan, Pose2(0.05, 0.0, 0.0), laser, &match);
+  EXPECT_TRUE(pose.allFinite());
+  EXPECT_FALSE(match.ok) << "two points cannot be matched";
+}
+
 }  // namespace
 }  // namespace ekf_slam
