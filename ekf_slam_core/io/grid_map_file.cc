@@ -7,23 +7,15 @@
 #include <sstream>
 
 #include "ekf_slam_core/io/atomic_file.h"
+#include "ekf_slam_core/io/text_fields.h"
 
 namespace ekf_slam {
 namespace {
 
-std::string trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  const size_t b = s.find_last_not_of(" \t\r");
-  return s.substr(a, b - a + 1);
-}
+using io_text::trim;
 
 bool parseDouble(const std::string& text, double* value) {
-  const std::string t = trim(text);
-  if (t.empty()) return false;
-  char* end = nullptr;
-  *value = std::strtod(t.c_str(), &end);
-  return end == t.c_str() + t.size() && std::isfinite(*value);
+  return io_text::parseNumber(text, value) && std::isfinite(*value);
 }
 
 std::string imagePathFor(const std::string& yaml_path) {

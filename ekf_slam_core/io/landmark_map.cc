@@ -11,24 +11,13 @@
 #include <sstream>
 
 #include "ekf_slam_core/io/atomic_file.h"
+#include "ekf_slam_core/io/text_fields.h"
 
 namespace ekf_slam {
 namespace {
 
-std::string trim(const std::string& s) {
-  const size_t begin = s.find_first_not_of(" \t\r");
-  if (begin == std::string::npos) return "";
-  const size_t end = s.find_last_not_of(" \t\r");
-  return s.substr(begin, end - begin + 1);
-}
-
-bool parseNumber(const std::string& text, double* value) {
-  const std::string t = trim(text);
-  if (t.empty()) return false;
-  char* end = nullptr;
-  *value = std::strtod(t.c_str(), &end);
-  return end == t.c_str() + t.size();
-}
+using io_text::parseNumber;
+using io_text::trim;
 
 // Splits "a: 1, b: [1, 2], c: 3" at the commas outside brackets.
 std::vector<std::string> splitTopLevel(const std::string& s) {

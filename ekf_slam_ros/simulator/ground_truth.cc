@@ -9,9 +9,7 @@
 namespace ekf_slam {
 namespace sim {
 
-geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
-  return ros_conversions::toPoseMessage(pose);
-}
+using ros_conversions::toPoseMessage;
 
 nav_msgs::Odometry toOdometry(const Pose2& pose, double velocity, double rotational_velocity,
                               const ros::Time& stamp, const std::string& frame,

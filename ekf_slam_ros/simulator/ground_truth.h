@@ -26,8 +26,6 @@
 namespace ekf_slam {
 namespace sim {
 
-geometry_msgs::Pose toPoseMessage(const Pose2& pose);
-
 // The true pose and body velocities (m/s, rad/s) as odometry in `frame`.
 nav_msgs::Odometry toOdometry(const Pose2& pose, double velocity, double rotational_velocity,
                               const ros::Time& stamp, const std::string& frame,

@@ -63,10 +63,6 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a = 1.0f) {
   return c;
 }
 
-geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  return ros_conversions::quaternionOfYaw(yaw);
-}
-
 visualization_msgs::Marker marker(const std_msgs::Header& header, const std::string& ns, int id,
                                   int type) {
   visualization_msgs::Marker m;
@@ -88,7 +84,7 @@ visualization_msgs::Marker ellipseMarker(const std_msgs::Header& header, const s
   const CovarianceEllipse e = covarianceEllipse(covariance, probability);
   visualization_msgs::Marker m = marker(header, ns, id, visualization_msgs::Marker::CYLINDER);
   m.pose.position = point(centre.x(), centre.y());
-  m.pose.orientation = yawQuaternion(e.angle);
+  m.pose.orientation = ros_conversions::quaternionOfYaw(e.angle);
   // rviz refuses zero scales; a perfectly known point is drawn 1 mm wide.
   m.scale.x = std::max(2.0 * e.semi_major, 1e-3);
   m.scale.y = std::max(2.0 * e.semi_minor, 1e-3);
