@@ -133,6 +133,7 @@ void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
       continue;
     }
     const double bearing = laser_pose.theta + scan.angle(i);
+    if (!std::isfinite(bearing)) continue;  // a sweep whose bearings overflow
     const Vector2 end = origin + length * Vector2(std::cos(bearing), std::sin(bearing));
     if (!ensureContains(origin, end)) {
       ++rays_beyond_limit_;

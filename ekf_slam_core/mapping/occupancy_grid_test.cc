@@ -109,6 +109,19 @@ TEST(OccupancyGrid, NoReturnBeamsAndBadValuesNeverMarkHits) {
   for (int8_t v : cleared.occupancyValues()) EXPECT_LE(v, 50);
 }
 
+TEST(OccupancyGrid, BeamsWithoutAFiniteBearingAreLeftOut) {
+  Scan scan;
+  scan.angle_min = 0.0;
+  scan.angle_increment = 1e308;  // beam 0 at 0 rad, beam 2 at +inf
+  scan.range_min = 0.1;
+  scan.range_max = 80.0;
+  scan.ranges = {2.0, 2.0, 2.0};
+  OccupancyGrid grid;
+  grid.insertScan(Pose2(), scan);
+  EXPECT_GT(grid.probability(2.0, 0.0), 0.5) << "the beam with a finite bearing is a hit";
+  EXPECT_EQ(grid.raysBeyondLimit(), 0) << "an unusable bearing is not a ray beyond the limit";
+}
+
 TEST(OccupancyGrid, GrowingKeepsEarlierCells) {
   sim::PolygonWorld wall;
   wall.addSegment({3, -5}, {3, 5});

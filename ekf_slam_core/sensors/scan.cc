@@ -21,6 +21,11 @@ std::string validateScan(const Scan& scan) {
   } else if (!(scan.range_max > scan.range_min)) {
     error << "Scan.range_max must be greater than range_min (" << scan.range_min << "), got "
           << scan.range_max;
+  } else if (scan.size() > 1 && !std::isfinite(scan.angle(scan.size() - 1))) {
+    // Each increment is finite but the sweep is not: angle_min plus
+    // (n - 1) increments overflows, so the last beams have no bearing.
+    error << "Scan.angle_increment " << scan.angle_increment << " over " << scan.size()
+          << " beams gives a last bearing of " << scan.angle(scan.size() - 1);
   } else if (!std::isfinite(scan.stamp)) {
     error << "Scan.stamp must be finite, got " << scan.stamp;
   }

@@ -47,6 +47,13 @@ TEST(Scan, ValidationNamesTheBadField) {
   scan = makeScan({1.0});
   scan.stamp = std::numeric_limits<double>::infinity();
   EXPECT_NE(validateScan(scan).find("Scan.stamp"), std::string::npos);
+  // Finite fields whose sweep overflows: the last bearing is +inf.
+  scan = makeScan(std::vector<double>(181, 1.0));
+  scan.angle_increment = 1e307;
+  EXPECT_NE(validateScan(scan).find("last bearing"), std::string::npos);
+  scan = makeScan({1.0});
+  scan.angle_increment = 1e307;
+  EXPECT_EQ(validateScan(scan), "");  // one beam has no sweep to overflow
 }
 
 }  // namespace

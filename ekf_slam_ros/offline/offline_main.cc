@@ -126,6 +126,7 @@ std::string writeFirstLastScans(const std::string& path, const ekf_slam::LogData
       for (int i = 0; i < scan.size(); ++i) {
         if (!scan.isValid(i)) continue;
         const double a = scan.angle(i);
+        if (!std::isfinite(a)) continue;  // a sweep whose bearings overflow
         const ekf_slam::Vector2 p = ekf_slam::transformFrom(
             sensor, ekf_slam::Vector2(scan.ranges[i] * std::cos(a), scan.ranges[i] * std::sin(a)));
         out << frame << ' ' << names[k] << ' ' << p.x() << ' ' << p.y() << '\n';
