@@ -1,12 +1,14 @@
 // Every threshold of the laser feature extractor (thesis §4.2.2, §4.3.2),
-// with its unit and default. validateFeatureOptions() rejects bad values with
-// a message naming the field; the YAML loader of the adapter uses the same
-// field names.
+// with its unit, default and admissible values (visitFields, see
+// geometry/option_fields.h). validateFeatureOptions() rejects bad values with
+// a message naming the field; the configuration loaders read the same
+// declarations.
 #pragma once
 
 #include <string>
 
 #include "ekf_slam_core/geometry/angle.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 
 namespace ekf_slam {
 
@@ -76,6 +78,29 @@ struct FeatureOptions {
   // millimetres and a few such sightings make the filter's heading
   // overconfident (docs/results.md, "The pose NEES"). 0: beam noise only (thesis).
   double point_model_sigma = 0.0;
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.choice("cluster_mode", cluster_mode,
+             {{ClusterMode::kFixed, "fixed"}, {ClusterMode::kAdaptive, "adaptive"}});
+    v.number("range_sigma", range_sigma, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("bearing_sigma", bearing_sigma, Bounds::closed(0.0, 1.0, "rad"));
+    v.number("cluster_threshold", cluster_threshold, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("cluster_incidence_angle", cluster_incidence_angle,
+             Bounds::open(0.0, kPi / 2.0, "rad"));
+    v.integer("cluster_max_invalid_beams", cluster_max_invalid_beams,
+              Bounds::closed(0, 1000, "beams"));
+    v.number("split_threshold", split_threshold, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("merge_chi2", merge_chi2, Bounds::openClosed(0.0, 1e6));
+    v.integer("min_line_points", min_line_points, Bounds::closed(2, 100000));
+    v.number("min_line_length", min_line_length, Bounds::closed(0.0, 100.0, "m"));
+    v.integer("break_guard_points", break_guard_points, Bounds::closed(0, 100));
+    v.integer("end_trim_points", end_trim_points, Bounds::closed(0, 100));
+    v.number("corner_min_angle", corner_min_angle, Bounds::openClosed(0.0, kPi / 2.0, "rad"));
+    v.number("corner_max_distance", corner_max_distance, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("endpoint_max_gap", endpoint_max_gap, Bounds::closed(0.0, 10.0, "m"));
+    v.number("point_model_sigma", point_model_sigma, Bounds::closed(0.0, 1.0, "m"));
+  }
 };
 
 // Empty when every field is usable; otherwise a message naming the first bad

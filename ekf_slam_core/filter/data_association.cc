@@ -139,22 +139,11 @@ class JointCompatibility {
 }  // namespace
 
 std::string AssociationOptions::validate() const {
-  if (!(gate_probability > 0.0 && gate_probability < 1.0)) {
-    return "gate_probability must be in (0, 1)";
-  }
-  if (!(new_landmark_probability >= gate_probability && new_landmark_probability < 1.0)) {
-    return "new_landmark_probability must be in [gate_probability, 1)";
-  }
-  if (jcbb_max_nodes < 1) return "jcbb_max_nodes must be >= 1";
-  if (max_candidates_reported < 0) return "max_candidates_reported must be >= 0";
-  if (!(merge_probability >= 0.0 && merge_probability < 1.0)) {
-    return "merge_probability must be in [0, 1) (0: no merging)";
-  }
-  if (!(merge_bias_sigma >= 0.0 && std::isfinite(merge_bias_sigma))) {
-    return "merge_bias_sigma must be finite and >= 0 (m)";
-  }
-  if (!(merge_distance >= 0.0 && std::isfinite(merge_distance))) {
-    return "merge_distance must be finite and >= 0 (m)";
+  const std::string error = checkFields(*this);
+  if (!error.empty()) return error;
+  if (new_landmark_probability < gate_probability) {
+    return "new_landmark_probability must be >= gate_probability (" +
+           std::to_string(gate_probability) + "), got " + std::to_string(new_landmark_probability);
   }
   return "";
 }

@@ -18,6 +18,8 @@
 
 #include "ekf_slam_core/filter/ekf_slam.h"
 
+#include "ekf_slam_core/geometry/option_fields.h"
+
 namespace ekf_slam {
 
 enum class AssociationMethod { kNearestNeighbour, kJointCompatibility };
@@ -41,6 +43,22 @@ struct AssociationOptions {
   // seen from two sides); added as b²I to the merge test and update.
   double merge_bias_sigma = 0.02;
 
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.choice("method", method,
+             {{AssociationMethod::kNearestNeighbour, "nn"},
+              {AssociationMethod::kJointCompatibility, "jcbb"}});
+    v.number("gate_probability", gate_probability, Bounds::open(0.0, 1.0));
+    v.number("new_landmark_probability", new_landmark_probability, Bounds::open(0.0, 1.0));
+    v.number("merge_probability", merge_probability, Bounds::closedOpen(0.0, 1.0));
+    v.number("merge_distance", merge_distance, Bounds::closed(0.0, 1e3, "m"));
+    v.number("merge_bias_sigma", merge_bias_sigma, Bounds::closed(0.0, 1.0, "m"));
+    v.integer("jcbb_max_nodes", jcbb_max_nodes, Bounds::closed(1, 1e8, "nodes"));
+    v.integer("max_candidates_reported", max_candidates_reported, Bounds::closed(0, 1000));
+  }
+
+  // Empty when valid, else names the bad field. Beyond each field's bounds:
+  // new_landmark_probability >= gate_probability.
   std::string validate() const;
 };
 

@@ -47,13 +47,8 @@ const char* toString(FilterStatus status) {
 }
 
 std::string FilterOptions::validate() const {
-  const std::string noise = motion_noise.validate();
-  if (!noise.empty()) return noise;
   if (!laser_pose.allFinite()) return "laser_pose must be finite";
-  if (!(max_step_translation > 0.0)) return "max_step_translation must be > 0 (m)";
-  if (!(max_step_rotation > 0.0)) return "max_step_rotation must be > 0 (rad)";
-  if (tentative_max_age < 0) return "tentative_max_age must be >= 0 (steps)";
-  return "";
+  return checkFields(*this);
 }
 
 EkfSlam::EkfSlam(const FilterOptions& options, const Pose2& initial_pose,

@@ -47,6 +47,17 @@ struct FilterOptions {
   // overconfident on long runs. Off: the textbook EKF (thesis).
   bool first_estimate_jacobians = false;
 
+  // The fields a configuration sets; laser_pose is a pose, checked in
+  // validate() (finite).
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("max_step_translation", max_step_translation, Bounds::above(0.0, "m"));
+    v.flag("first_estimate_jacobians", first_estimate_jacobians);
+    v.number("max_step_rotation", max_step_rotation, Bounds::openClosed(0.0, 2.0 * kPi, "rad"));
+    v.integer("tentative_max_age", tentative_max_age, Bounds::closed(0, 1e6, "steps"));
+    v.section("motion_noise", motion_noise);
+  }
+
   std::string validate() const;  // empty when valid, else names the bad field
 };
 

@@ -5,13 +5,7 @@
 
 namespace ekf_slam {
 
-std::string CorrelativeMatcherOptions::validate() const {
-  if (!(resolution > 0.0)) return "resolution must be > 0 (m)";
-  if (!(sigma > 0.0)) return "sigma must be > 0 (m)";
-  if (levels < 1 || levels > 16) return "levels must be in [1, 16]";
-  if (!(angular_step > 0.0)) return "angular_step must be > 0 (rad)";
-  return "";
-}
+std::string CorrelativeMatcherOptions::validate() const { return checkFields(*this); }
 
 LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
                                const CorrelativeMatcherOptions& options)

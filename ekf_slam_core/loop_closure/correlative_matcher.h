@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 
 namespace ekf_slam {
@@ -32,6 +33,14 @@ struct CorrelativeMatcherOptions {
   double sigma = 0.07;           // m: width of the likelihood around a reference point
   int levels = 7;                // grid levels (1: exhaustive; top blocks are 2^(levels-1) cells)
   double angular_step = 0.0087;  // rad (0.5 deg): rotation step of the search
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("resolution", resolution, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("sigma", sigma, Bounds::openClosed(0.0, 10.0, "m"));
+    v.integer("levels", levels, Bounds::closed(1, 16));
+    v.number("angular_step", angular_step, Bounds::openClosed(0.0, 0.5, "rad"));
+  }
 
   std::string validate() const;  // empty when valid, else names the bad field
 };

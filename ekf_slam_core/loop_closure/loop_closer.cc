@@ -12,49 +12,11 @@
 namespace ekf_slam {
 
 std::string LoopClosureOptions::validate() const {
-  if (!(keyscan_distance > 0.0)) return "keyscan_distance must be > 0 (m)";
-  if (!(keyscan_angle > 0.0)) return "keyscan_angle must be > 0 (rad)";
-  if (!(max_range > 0.0)) return "max_range must be > 0 (m)";
-  if (!(step_sigma_translation > 0.0)) return "step_sigma_translation must be > 0 (m)";
-  if (!(step_sigma_rotation > 0.0)) return "step_sigma_rotation must be > 0 (rad)";
-  if (!(translation_sigma_per_sqrt_metre >= 0.0 && rotation_sigma_per_sqrt_metre >= 0.0 &&
-        rotation_sigma_per_sqrt_radian >= 0.0)) {
-    return "the *_per_sqrt_* noise terms must be >= 0";
-  }
-  if (!(min_loop_travel >= 0.0)) return "min_loop_travel must be >= 0 (m)";
-  if (!(search_sigmas > 0.0)) return "search_sigmas must be > 0";
-  if (!(search_radius_min > 0.0)) return "search_radius_min must be > 0 (m)";
-  if (!(search_radius_max >= search_radius_min)) {
+  const std::string error = checkFields(*this);
+  if (!error.empty()) return error;
+  if (search_radius_max < search_radius_min) {
     return "search_radius_max must be >= search_radius_min (m)";
   }
-  if (!(search_angle_min > 0.0)) return "search_angle_min must be > 0 (rad)";
-  if (!(max_heading_difference > 0.0)) return "max_heading_difference must be > 0 (rad)";
-  if (max_candidates < 1) return "max_candidates must be >= 1";
-  if (query_keys < 0) return "query_keys must be >= 0";
-  if (!(confirm_radius > 0.0)) return "confirm_radius must be > 0 (m)";
-  if (confirm_keys < 1) return "confirm_keys must be >= 1";
-  if (submap_half_width < 0) return "submap_half_width must be >= 0";
-  if (retry_interval < 0) return "retry_interval must be >= 0";
-  std::string error = correlative.validate();
-  if (!error.empty()) return "correlative: " + error;
-  if (!(search_point_spacing >= 0.0)) return "search_point_spacing must be >= 0 (m)";
-  if (!(min_score > 0.0 && min_score <= 1.0)) return "min_score must be in (0, 1]";
-  if (!(min_inlier_fraction >= 0.0 && min_inlier_fraction <= 1.0)) {
-    return "min_inlier_fraction must be in [0, 1]";
-  }
-  if (!(max_rms_residual > 0.0)) return "max_rms_residual must be > 0 (m)";
-  if (!(max_degenerate_sigma > 0.0)) return "max_degenerate_sigma must be > 0 (m)";
-  if (!(max_icp_shift > 0.0)) return "max_icp_shift must be > 0 (m)";
-  if (!(loop_sigma_translation > 0.0)) return "loop_sigma_translation must be > 0 (m)";
-  if (!(loop_sigma_rotation > 0.0)) return "loop_sigma_rotation must be > 0 (rad)";
-  if (!(min_final_weight >= 0.0 && min_final_weight <= 1.0)) {
-    return "min_final_weight must be in [0, 1]";
-  }
-  if (!(consistency_probability >= 0.0 && consistency_probability < 1.0)) {
-    return "consistency_probability must be in [0, 1)";
-  }
-  error = optimizer.validate();
-  if (!error.empty()) return "optimizer: " + error;
   return "";
 }
 

@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/correlative_matcher.h"
 #include "ekf_slam_core/pose_graph/pose_graph.h"
@@ -107,6 +108,48 @@ struct LoopClosureOptions {
   bool reanchor_filter = true;
   PoseGraphOptions optimizer;
 
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.flag("enabled", enabled);
+    v.number("keyscan_distance", keyscan_distance, Bounds::above(0.0, "m"));
+    v.number("keyscan_angle", keyscan_angle, Bounds::openClosed(0.0, 2.0 * kPi, "rad"));
+    v.number("max_range", max_range, Bounds::above(0.0, "m"));
+    v.number("step_sigma_translation", step_sigma_translation, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("translation_sigma_per_sqrt_metre", translation_sigma_per_sqrt_metre,
+             Bounds::closed(0.0, 10.0, "m/√m"));
+    v.number("step_sigma_rotation", step_sigma_rotation, Bounds::openClosed(0.0, kPi, "rad"));
+    v.number("rotation_sigma_per_sqrt_metre", rotation_sigma_per_sqrt_metre,
+             Bounds::closed(0.0, kPi, "rad/√m"));
+    v.number("rotation_sigma_per_sqrt_radian", rotation_sigma_per_sqrt_radian,
+             Bounds::closed(0.0, kPi, "rad/√rad"));
+    v.number("min_loop_travel", min_loop_travel, Bounds::atLeast(0.0, "m"));
+    v.number("search_sigmas", search_sigmas, Bounds::openClosed(0.0, 100.0, "sigmas"));
+    v.number("search_radius_min", search_radius_min, Bounds::openClosed(0.0, 1e5, "m"));
+    v.number("search_radius_max", search_radius_max, Bounds::openClosed(0.0, 1e5, "m"));
+    v.number("search_angle_min", search_angle_min, Bounds::openClosed(0.0, kPi, "rad"));
+    v.number("max_heading_difference", max_heading_difference, Bounds::openClosed(0.0, kPi, "rad"));
+    v.integer("max_candidates", max_candidates, Bounds::closed(1, 1000));
+    v.integer("submap_half_width", submap_half_width, Bounds::closed(0, 1000, "key scans"));
+    v.integer("query_keys", query_keys, Bounds::closed(0, 1000, "key scans"));
+    v.integer("retry_interval", retry_interval, Bounds::closed(0, 100000, "key scans"));
+    v.number("confirm_radius", confirm_radius, Bounds::openClosed(0.0, 1e9, "m"));
+    v.integer("confirm_keys", confirm_keys, Bounds::closed(1, 100000, "key scans"));
+    v.section("correlative", correlative);
+    v.number("search_point_spacing", search_point_spacing, Bounds::closed(0.0, 10.0, "m"));
+    v.number("min_score", min_score, Bounds::openClosed(0.0, 1.0));
+    v.number("min_inlier_fraction", min_inlier_fraction, Bounds::closed(0.0, 1.0));
+    v.number("max_rms_residual", max_rms_residual, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("max_degenerate_sigma", max_degenerate_sigma, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("max_icp_shift", max_icp_shift, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("loop_sigma_translation", loop_sigma_translation, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("loop_sigma_rotation", loop_sigma_rotation, Bounds::openClosed(0.0, kPi, "rad"));
+    v.number("min_final_weight", min_final_weight, Bounds::closed(0.0, 1.0));
+    v.number("consistency_probability", consistency_probability, Bounds::closedOpen(0.0, 1.0));
+    v.flag("reanchor_filter", reanchor_filter);
+    v.section("optimizer", optimizer);
+  }
+
+  // Beyond each field's bounds: search_radius_max >= search_radius_min.
   std::string validate() const;  // empty when valid, else names the bad field
 };
 

@@ -248,7 +248,9 @@ TEST(LoopClosureOptions, ValidateNamesTheBadField) {
   EXPECT_NE(options.validate().find("search_radius_max"), std::string::npos);
   options = LoopClosureOptions();
   options.correlative.resolution = 0.0;
-  EXPECT_NE(options.validate().find("correlative: resolution"), std::string::npos);
+  EXPECT_NE(options.validate().find("correlative.resolution must be in (0, 10] (m)"),
+            std::string::npos)
+      << options.validate();
 }
 
 }  // namespace

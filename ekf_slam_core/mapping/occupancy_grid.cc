@@ -12,20 +12,7 @@ double logOdds(double p) { return std::log(p / (1.0 - p)); }
 
 }  // namespace
 
-std::string OccupancyGridOptions::validate() const {
-  if (!(resolution > 0.0)) return "resolution must be > 0 (m)";
-  if (!(hit_probability > 0.5 && hit_probability < 1.0))
-    return "hit_probability must be in (0.5, 1)";
-  if (!(miss_probability > 0.0 && miss_probability < 0.5)) {
-    return "miss_probability must be in (0, 0.5)";
-  }
-  if (!(clamp_log_odds > 0.0)) return "clamp_log_odds must be > 0";
-  if (!(max_insert_range > 0.0)) return "max_insert_range must be > 0 (m)";
-  if (!(no_return_free_range >= 0.0)) return "no_return_free_range must be >= 0 (m)";
-  if (!(grow_margin > 0.0)) return "grow_margin must be > 0 (m)";
-  if (!(max_cells >= 1.0)) return "max_cells must be >= 1";
-  return "";
-}
+std::string OccupancyGridOptions::validate() const { return checkFields(*this); }
 
 OccupancyGrid::OccupancyGrid(const OccupancyGridOptions& options) : options_(options) {
   log_hit_ = static_cast<float>(logOdds(options_.hit_probability));

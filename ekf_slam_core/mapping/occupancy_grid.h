@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 #include "ekf_slam_core/sensors/scan.h"
 
@@ -30,6 +31,18 @@ struct OccupancyGridOptions {
   // off: corrupt odometry) is left out and counted, instead of an
   // allocation that exhausts the machine.
   double max_cells = 1.0e8;
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("resolution", resolution, Bounds::openClosed(0.0, 10.0, "m"));
+    v.number("hit_probability", hit_probability, Bounds::open(0.5, 1.0));
+    v.number("miss_probability", miss_probability, Bounds::open(0.0, 0.5));
+    v.number("clamp_log_odds", clamp_log_odds, Bounds::openClosed(0.0, 100.0));
+    v.number("max_insert_range", max_insert_range, Bounds::above(0.0, "m"));
+    v.number("no_return_free_range", no_return_free_range, Bounds::atLeast(0.0, "m"));
+    v.number("max_cells", max_cells, Bounds::closed(1.0, 1e10, "cells"));
+    v.number("grow_margin", grow_margin, Bounds::openClosed(0.0, 1e3, "m"));
+  }
 
   std::string validate() const;
 };

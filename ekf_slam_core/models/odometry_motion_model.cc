@@ -18,23 +18,7 @@ bool OdometryControl::allFinite() const {
   return std::isfinite(rot1) && std::isfinite(trans) && std::isfinite(rot2);
 }
 
-std::string MotionNoiseOptions::validate() const {
-  const struct {
-    const char* name;
-    double value;
-  } fields[] = {{"rot_per_rot", rot_per_rot},         {"rot_per_trans", rot_per_trans},
-                {"trans_per_trans", trans_per_trans}, {"trans_per_rot", trans_per_rot},
-                {"min_rot_sigma", min_rot_sigma},     {"min_trans_sigma", min_trans_sigma},
-                {"rot_per_metre", rot_per_metre},     {"trans_per_metre", trans_per_metre},
-                {"rot_per_radian", rot_per_radian}};
-  for (const auto& field : fields) {
-    if (!std::isfinite(field.value) || field.value < 0.0) {
-      return std::string("motion noise '") + field.name + "' must be finite and >= 0, got " +
-             std::to_string(field.value);
-    }
-  }
-  return "";
-}
+std::string MotionNoiseOptions::validate() const { return checkFields(*this); }
 
 OdometryControl controlFromOdometry(const Pose2& odom_previous, const Pose2& odom_current) {
   const Pose2 d = between(odom_previous, odom_current);

@@ -29,6 +29,7 @@
 
 #include <string>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 
 namespace ekf_slam {
@@ -61,6 +62,19 @@ struct MotionNoiseOptions {
       0.0;  // rad²/m:   heading variance per metre driven (split over rot1, rot2)
   double trans_per_metre = 0.0;  // m²/m:     translation variance per metre driven
   double rot_per_radian = 0.0;   // rad²/rad: rotation variance per radian turned
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("rot_per_rot", rot_per_rot, Bounds::atLeast(0.0, "rad²/rad²"));
+    v.number("rot_per_trans", rot_per_trans, Bounds::atLeast(0.0, "rad²/m²"));
+    v.number("trans_per_trans", trans_per_trans, Bounds::atLeast(0.0, "m²/m²"));
+    v.number("trans_per_rot", trans_per_rot, Bounds::atLeast(0.0, "m²/rad²"));
+    v.number("min_rot_sigma", min_rot_sigma, Bounds::atLeast(0.0, "rad"));
+    v.number("min_trans_sigma", min_trans_sigma, Bounds::atLeast(0.0, "m"));
+    v.number("rot_per_metre", rot_per_metre, Bounds::atLeast(0.0, "rad²/m"));
+    v.number("trans_per_metre", trans_per_metre, Bounds::atLeast(0.0, "m²/m"));
+    v.number("rot_per_radian", rot_per_radian, Bounds::atLeast(0.0, "rad²/rad"));
+  }
 
   // Empty when valid, else a message naming the bad field.
   std::string validate() const;

@@ -37,14 +37,11 @@ std::string PipelineOptions::validate() const {
       initial_pose_covariance.diagonal().minCoeff() < 0.0) {
     return "initial_pose_covariance must be finite, symmetric, with a non-negative diagonal";
   }
-  if (!(min_travel_distance >= 0.0)) return "min_travel_distance must be >= 0 (m)";
-  if (!(min_travel_angle >= 0.0)) return "min_travel_angle must be >= 0 (rad)";
-  if (!(max_landmark_range > 0.0)) return "max_landmark_range must be > 0 (m)";
-  if (!(min_landmark_range >= 0.0 && min_landmark_range < max_landmark_range)) {
-    return "min_landmark_range must be >= 0 and below max_landmark_range (m)";
+  error = checkFields(*this);
+  if (!error.empty()) return error;
+  if (min_landmark_range >= max_landmark_range) {
+    return "min_landmark_range must be below max_landmark_range (m)";
   }
-  if (prune_min_observations < 0) return "prune_min_observations must be >= 0";
-  if (prune_age_steps < 1) return "prune_age_steps must be >= 1";
   error = scan_matching.validate();
   if (!error.empty()) return "scan_matching: " + error;
   error = scan_matched_motion_noise.validate();

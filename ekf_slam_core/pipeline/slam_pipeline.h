@@ -29,6 +29,7 @@
 
 #include "ekf_slam_core/features/extract_features.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
@@ -86,6 +87,19 @@ struct PipelineOptions {
 
   // Noise of a scan-matched increment: a few millimetres and a tenth of a
   // degree per step, growing slowly with the motion (docs/offline.md).
+  // The pipeline's own numbers. The nested options (features, filter, …)
+  // check themselves in validate() and are the configuration's sections;
+  // initial_pose and its covariance are checked there too.
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("min_travel_distance", min_travel_distance, Bounds::atLeast(0.0, "m"));
+    v.number("min_travel_angle", min_travel_angle, Bounds::closed(0.0, 2.0 * kPi, "rad"));
+    v.number("max_landmark_range", max_landmark_range, Bounds::above(0.0, "m"));
+    v.number("min_landmark_range", min_landmark_range, Bounds::atLeast(0.0, "m"));
+    v.integer("prune_min_observations", prune_min_observations, Bounds::closed(0, 1e6));
+    v.integer("prune_age_steps", prune_age_steps, Bounds::closed(1, 1e8, "iterations"));
+  }
+
   static MotionNoiseOptions defaultScanMatchedMotionNoise();
 
   std::string validate() const;  // empty when valid, else names the bad field

@@ -8,14 +8,7 @@
 
 namespace ekf_slam {
 
-std::string LandmarkGraphOptions::validate() const {
-  if (max_iterations < 1) return "max_iterations must be >= 1";
-  if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
-  if (!(initial_lambda >= 0.0)) return "initial_lambda must be >= 0";
-  if (!(min_relative_decrease >= 0.0)) return "min_relative_decrease must be >= 0";
-  if (!(kernel_width > 0.0)) return "kernel_width must be > 0 (sigmas)";
-  return "";
-}
+std::string LandmarkGraphOptions::validate() const { return checkFields(*this); }
 
 Vector3 relativePoseError(const Pose2& from, const Pose2& to, const RelativePoseEdge& edge,
                           Matrix3* J_e_from, Matrix3* J_e_to) {

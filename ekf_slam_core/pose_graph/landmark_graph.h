@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 #include "ekf_slam_core/models/point_observation_model.h"
 #include "ekf_slam_core/pose_graph/levenberg_marquardt.h"
@@ -60,6 +61,15 @@ struct LandmarkGraphOptions {
   double min_relative_decrease = 1e-7;
   double initial_lambda = 1e-6;  // damping at the first step (relative to the diagonal)
   double kernel_width = 3.0;     // sigmas, for every robust edge
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("kernel_width", kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
+    v.integer("max_iterations", max_iterations, Bounds::closed(1, 100000));
+    v.number("min_relative_decrease", min_relative_decrease, Bounds::closed(0.0, 1.0));
+    v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
+    v.number("initial_lambda", initial_lambda, Bounds::closed(0.0, 1e6));
+  }
 
   std::string validate() const;  // empty when valid, else names the bad field
 };

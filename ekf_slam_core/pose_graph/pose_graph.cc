@@ -8,13 +8,7 @@
 
 namespace ekf_slam {
 
-std::string PoseGraphOptions::validate() const {
-  if (max_iterations < 1) return "max_iterations must be >= 1";
-  if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
-  if (!(robust_kernel_width > 0.0)) return "robust_kernel_width must be > 0 (sigmas)";
-  if (!(initial_lambda >= 0.0)) return "initial_lambda must be >= 0";
-  return "";
-}
+std::string PoseGraphOptions::validate() const { return checkFields(*this); }
 
 Vector3 edgeError(const Pose2& from, const Pose2& to, const Pose2& measurement, Matrix3* J_e_from,
                   Matrix3* J_e_to) {

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 
 namespace ekf_slam {
@@ -41,6 +42,14 @@ struct PoseGraphOptions {
   double robust_kernel_width =
       3.0;                       // c: Mahalanobis distance (sigmas) where the Cauchy weight is 1/2
   double initial_lambda = 1e-6;  // LM damping at the first step (relative to the diagonal)
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.integer("max_iterations", max_iterations, Bounds::closed(1, 10000));
+    v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
+    v.number("robust_kernel_width", robust_kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
+    v.number("initial_lambda", initial_lambda, Bounds::closed(0.0, 1e6));
+  }
 
   std::string validate() const;  // empty when valid, else names the bad field
 };

@@ -10,42 +10,11 @@
 namespace ekf_slam {
 
 std::string ScanMatcherOptions::validate() const {
-  if (!(correspondence_distance > 0.0)) return "correspondence_distance must be > 0 (m)";
-  if (!(initial_correspondence_distance >= correspondence_distance)) {
+  const std::string error = checkFields(*this);
+  if (!error.empty()) return error;
+  if (initial_correspondence_distance < correspondence_distance) {
     return "initial_correspondence_distance must be >= correspondence_distance (m)";
   }
-  if (!(huber_delta > 0.0)) return "huber_delta must be > 0 (m)";
-  if (!(point_sigma > 0.0)) return "point_sigma must be > 0 (m)";
-  if (!(prior_sigma_translation > 0.0)) return "prior_sigma_translation must be > 0 (m)";
-  if (!(prior_sigma_rotation > 0.0)) return "prior_sigma_rotation must be > 0 (rad)";
-  if (max_iterations < 1) return "max_iterations must be >= 1";
-  if (!(convergence_step > 0.0)) return "convergence_step must be > 0";
-  if (!(min_point_spacing >= 0.0)) return "min_point_spacing must be >= 0 (m)";
-  if (!(max_range > 0.0)) return "max_range must be > 0 (m)";
-  if (!(normal_radius > 0.0)) return "normal_radius must be > 0 (m)";
-  if (min_correspondences < 3) return "min_correspondences must be >= 3";
-  if (!(min_inlier_fraction >= 0.0 && min_inlier_fraction <= 1.0)) {
-    return "min_inlier_fraction must be in [0, 1]";
-  }
-  if (!(max_correction_translation > 0.0)) return "max_correction_translation must be > 0 (m)";
-  if (!(max_correction_rotation > 0.0)) return "max_correction_rotation must be > 0 (rad)";
-  if (map_mode != "local" && map_mode != "global") {
-    return "map_mode must be local or global, got " + map_mode;
-  }
-  if (!(map_point_spacing >= 0.0)) return "map_point_spacing must be >= 0 (m)";
-  if (local_map_scans < 1) return "local_map_scans must be >= 1";
-  if (!(keyscan_distance >= 0.0)) return "keyscan_distance must be >= 0 (m)";
-  if (!(keyscan_angle >= 0.0)) return "keyscan_angle must be >= 0 (rad)";
-  if (!(odometry_gate_probability >= 0.0 && odometry_gate_probability < 1.0)) {
-    return "odometry_gate_probability must be in [0, 1)";
-  }
-  if (!(odometry_check_sigma_translation > 0.0)) {
-    return "odometry_check_sigma_translation must be > 0 (m)";
-  }
-  if (!(odometry_check_sigma_rotation > 0.0)) {
-    return "odometry_check_sigma_rotation must be > 0 (rad)";
-  }
-  if (!(odometry_check_sigma_time >= 0.0)) return "odometry_check_sigma_time must be >= 0 (s)";
   return "";
 }
 

@@ -29,6 +29,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
 #include "ekf_slam_core/models/odometry_motion_model.h"
 #include "ekf_slam_core/sensors/scan.h"
@@ -81,6 +82,43 @@ struct ScanMatcherOptions {
   double odometry_check_sigma_rotation = 0.0524;   // rad, floor per scan (1 sigma, 3 deg)
   double odometry_check_sigma_time = 0.2;          // s, 1 sigma of the stamps' disagreement
 
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.flag("enabled", enabled);
+    v.number("initial_correspondence_distance", initial_correspondence_distance,
+             Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("correspondence_distance", correspondence_distance,
+             Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("huber_delta", huber_delta, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("point_sigma", point_sigma, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("prior_sigma_translation", prior_sigma_translation, Bounds::above(0.0, "m"));
+    v.number("prior_sigma_rotation", prior_sigma_rotation, Bounds::above(0.0, "rad"));
+    v.integer("max_iterations", max_iterations, Bounds::closed(1, 10000));
+    v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
+    v.number("min_point_spacing", min_point_spacing, Bounds::closed(0.0, 10.0, "m"));
+    v.number("max_range", max_range, Bounds::above(0.0, "m"));
+    v.number("normal_radius", normal_radius, Bounds::openClosed(0.0, 10.0, "m"));
+    v.integer("min_correspondences", min_correspondences, Bounds::closed(3, 100000));
+    v.number("min_inlier_fraction", min_inlier_fraction, Bounds::closed(0.0, 1.0));
+    v.number("max_correction_translation", max_correction_translation, Bounds::above(0.0, "m"));
+    v.number("max_correction_rotation", max_correction_rotation,
+             Bounds::openClosed(0.0, 2.0 * kPi, "rad"));
+    v.text("map_mode", map_mode, {"local", "global"});
+    v.number("map_point_spacing", map_point_spacing, Bounds::closed(0.0, 10.0, "m"));
+    v.integer("local_map_scans", local_map_scans, Bounds::closed(1, 10000, "scans"));
+    v.number("keyscan_distance", keyscan_distance, Bounds::atLeast(0.0, "m"));
+    v.number("keyscan_angle", keyscan_angle, Bounds::closed(0.0, 2.0 * kPi, "rad"));
+    v.number("odometry_gate_probability", odometry_gate_probability, Bounds::closedOpen(0.0, 1.0));
+    v.number("odometry_check_sigma_translation", odometry_check_sigma_translation,
+             Bounds::above(0.0, "m"));
+    v.number("odometry_check_sigma_rotation", odometry_check_sigma_rotation,
+             Bounds::openClosed(0.0, 2.0 * kPi, "rad"));
+    v.number("odometry_check_sigma_time", odometry_check_sigma_time,
+             Bounds::closed(0.0, 100.0, "s"));
+  }
+
+  // Beyond each field's bounds: initial_correspondence_distance >=
+  // correspondence_distance.
   std::string validate() const;  // empty when valid, else names the bad field
 };
 

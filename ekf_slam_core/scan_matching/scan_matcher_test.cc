@@ -261,9 +261,10 @@ TEST(ScanMatcherOptions, ValidationNamesTheBadField) {
 }
 
 // A sweep whose bearings overflow (angle_increment 1e308: from beam 2 on the
-// bearing lies beyond the range of a double) passes the scan's geometry
-// check, but its beams have no direction: they give no point, and matching
-// against them neither crashes nor moves the guess to NaN.
+// bearing lies beyond the range of a double) is refused by the scan's
+// geometry check; a caller that matches it anyway finds beams without a
+// direction: they give no point, and matching against them neither crashes
+// nor moves the guess to NaN.
 TEST(ScanMatcher, BeamsWithoutAFiniteBearingGiveNoPoints) {
   const ScanMatcherOptions options;
   Scan scan;
@@ -272,7 +273,7 @@ TEST(ScanMatcher, BeamsWithoutAFiniteBearingGiveNoPoints) {
   scan.range_min = 0.0;
   scan.range_max = 80.0;
   scan.ranges.assign(50, 3.0);
-  ASSERT_EQ(validateScan(scan), "");
+  ASSERT_NE(validateScan(scan).find("last bearing"), std::string::npos);
   const std::vector<Vector2> points = scanPointsInRobotFrame(scan, Pose2(0.1, 0.0, 0.0), options);
   ASSERT_EQ(points.size(), 2u) << "only beams 0 and 1 have a finite bearing";
   for (const Vector2& p : points) EXPECT_TRUE(p.allFinite());

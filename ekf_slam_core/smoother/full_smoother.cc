@@ -28,23 +28,7 @@ bool isPositiveDefinite(const Matrix3& m) {
 
 }  // namespace
 
-std::string FullSmootherOptions::validate() const {
-  if (revisit_gap < 1) return "revisit_gap must be >= 1 (iterations)";
-  if (!(revisit_gate_probability > 0.0 && revisit_gate_probability < 1.0)) {
-    return "revisit_gate_probability must be in (0, 1)";
-  }
-  if (max_verification_rounds < 0) return "max_verification_rounds must be >= 0";
-  if (!(reassociation_position_sigma >= 0.0)) {
-    return "reassociation_position_sigma must be >= 0 (m)";
-  }
-  if (!(reassociation_heading_sigma >= 0.0)) {
-    return "reassociation_heading_sigma must be >= 0 (rad)";
-  }
-  if (!(reassociation_gate_probability > 0.0 && reassociation_gate_probability < 1.0)) {
-    return "reassociation_gate_probability must be in (0, 1)";
-  }
-  return optimizer.validate();
-}
+std::string FullSmootherOptions::validate() const { return checkFields(*this); }
 
 void FullSmootherRecorder::setPrior(const Pose2& mean, const Matrix3& covariance) {
   prior_mean_ = mean;

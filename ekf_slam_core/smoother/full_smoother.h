@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "ekf_slam_core/filter/slam_iteration.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/pose_graph/landmark_graph.h"
 
 namespace ekf_slam {
@@ -80,6 +81,27 @@ struct FullSmootherOptions {
   double reassociation_position_sigma = 0.05;  // m
   double reassociation_heading_sigma = 0.01;   // rad
   double reassociation_gate_probability = 0.99;
+
+  // The optimizer's fields sit in the smoother's own section.
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    const Choices<RobustKernel> kernels = {{RobustKernel::kNone, "none"},
+                                           {RobustKernel::kHuber, "huber"},
+                                           {RobustKernel::kCauchy, "cauchy"}};
+    v.choice("observation_kernel", observation_kernel, kernels);
+    v.choice("loop_kernel", loop_kernel, kernels);
+    optimizer.visitFields(v);
+    v.integer("revisit_gap", revisit_gap, Bounds::closed(1, 1e8, "iterations"));
+    v.number("revisit_gate_probability", revisit_gate_probability, Bounds::open(0.0, 1.0));
+    v.integer("max_verification_rounds", max_verification_rounds, Bounds::closed(0, 100));
+    v.flag("reassociate", reassociate);
+    v.number("reassociation_position_sigma", reassociation_position_sigma,
+             Bounds::closed(0.0, 100.0, "m"));
+    v.number("reassociation_heading_sigma", reassociation_heading_sigma,
+             Bounds::closed(0.0, kPi, "rad"));
+    v.number("reassociation_gate_probability", reassociation_gate_probability,
+             Bounds::open(0.0, 1.0));
+  }
 
   std::string validate() const;  // empty when valid, else names the bad field
 };

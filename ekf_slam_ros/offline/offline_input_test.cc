@@ -12,10 +12,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <sstream>
+#include <vector>
 
 #include "ekf_slam_core/eval/relations.h"
 #include "ekf_slam_ros/offline/log_input.h"
@@ -109,15 +112,15 @@ features: {point_model_sigma: -0.01}
 )"),
                                            &config);
   for (const char* expected :
-       {"filter.motion_noise.rot_per_rot: must be in [0,",
+       {"filter.motion_noise.rot_per_rot: must be >= 0 (rad²/rad²), got -1",
         "filter.motion_noise.rot_per_rott: unknown key",
         "filter.laser_pose: must be a list of 3 numbers",
         "association.method: must be one of nn, jcbb", "mapp: unknown key",
         "map.resolution: must be a number", "scan_matching.map_mode: must be one of local, global",
-        "scan_matching.motion_noise.min_rot_sigma: must be in [0,",
+        "scan_matching.motion_noise.min_rot_sigma: must be >= 0 (rad), got -0.1",
         "smoother.observation_kernel: must be one of none, huber, cauchy",
-        "smoother.reassociation_gate_probability: must be in",
-        "features.point_model_sigma: must be in [0,"}) {
+        "smoother.reassociation_gate_probability: must be in (0, 1), got 1.5",
+        "features.point_model_sigma: must be in [0, 1] (m), got -0.01"}) {
     EXPECT_NE(error.find(expected), std::string::npos) << "missing '" << expected << "' in:\n"
                                                        << error;
   }
@@ -127,6 +130,128 @@ features: {point_model_sigma: -0.01}
   ASSERT_EQ(loadSlamConfig(YAML::Load("filter: {laser_pose: [0.16, 0, 0]}"), &laser), "");
   EXPECT_TRUE(laser.laser_pose_given);
   EXPECT_DOUBLE_EQ(laser.pipeline.filter.laser_pose.x, 0.16);
+}
+
+// One numeric field of an options struct: its path below the struct, its
+// bounds, and a setter into the struct it was collected from.
+struct NumericField {
+  std::string path;
+  Bounds bounds;
+  std::function<void(double)> set;
+};
+
+// A field visitor that lists the numeric fields.
+struct FieldCollector {
+  std::string prefix;
+  std::vector<NumericField>* out;
+  void number(const char* name, double& value, const Bounds& bounds) {
+    out->push_back({prefix + name, bounds, [&value](double v) { value = v; }});
+  }
+  template <class Integer>
+  void integer(const char* name, Integer& value, const Bounds& bounds) {
+    out->push_back(
+        {prefix + name, bounds, [&value](double v) { value = static_cast<Integer>(v); }});
+  }
+  void flag(const char*, bool&) {}
+  void text(const char*, std::string&, std::initializer_list<const char*>) {}
+  template <class Enum>
+  void choice(const char*, Enum&, Choices<Enum>) {}
+  template <class Options>
+  void section(const char* name, Options& options) {
+    FieldCollector inner{prefix + name + ".", out};
+    options.visitFields(inner);
+  }
+};
+
+// A value the bounds refuse: at or below the lower end, else at or above the
+// upper end (none when both ends are infinite).
+std::optional<double> refused(const Bounds& b) {
+  if (std::isfinite(b.min)) return b.min_open ? b.min : b.min - 1.0;
+  if (std::isfinite(b.max)) return b.max_open ? b.max : b.max + 1.0;
+  return std::nullopt;
+}
+
+// `{s: {a: {b: value}}}` for the section "s" and the path "a.b" (a section
+// may itself be a path).
+YAML::Node yamlAt(const std::string& section, const std::string& path, double value) {
+  char number[40];
+  std::snprintf(number, sizeof(number), "%.17g", value);
+  std::string text = number;
+  std::vector<std::string> keys;
+  std::stringstream parts(section + "." + path);
+  for (std::string key; std::getline(parts, key, '.');) keys.push_back(key);
+  for (auto key = keys.rbegin(); key != keys.rend(); ++key) text = "{" + *key + ": " + text + "}";
+  return YAML::Load(text);
+}
+
+std::string validateOf(const FeatureOptions& o) { return validateFeatureOptions(o); }
+template <class Options>
+std::string validateOf(const Options& o) {
+  return o.validate();
+}
+
+// For every numeric field of the options under `section`: a value outside
+// its declared bounds is refused by the struct's validate() and by the file
+// loader, both quoting the same rule. Returns the number of fields checked.
+template <class Options>
+int expectOneDeclaration(const std::string& section,
+                         const std::function<Options&(SlamConfig&)>& options_of) {
+  SlamConfig listed;
+  std::vector<NumericField> fields;
+  FieldCollector collector{"", &fields};
+  options_of(listed).visitFields(collector);
+  int checked = 0;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const std::optional<double> bad = refused(fields[i].bounds);
+    if (!bad) continue;
+    const std::string rule = "must be " + fields[i].bounds.text();
+    // The struct's own check.
+    SlamConfig config;
+    std::vector<NumericField> own;
+    FieldCollector setter{"", &own};
+    options_of(config).visitFields(setter);
+    own[i].set(*bad);
+    const std::string invalid = validateOf(options_of(config));
+    EXPECT_NE(invalid.find(fields[i].path + " " + rule), std::string::npos)
+        << section << "." << fields[i].path << " = " << *bad << ": validate() says '" << invalid
+        << "'";
+    // The loader's.
+    SlamConfig loaded;
+    const std::string error = loadSlamConfig(yamlAt(section, fields[i].path, *bad), &loaded);
+    EXPECT_NE(error.find(section + "." + fields[i].path + ": " + rule), std::string::npos)
+        << "the loader says '" << error << "'";
+    ++checked;
+  }
+  return checked;
+}
+
+// Each field's default and bounds are declared once, beside the field; the
+// core's validate() and the configuration loader both read them there.
+TEST(SlamConfig, ValidateAndTheLoaderReadTheSameBounds) {
+  int checked = 0;
+  checked += expectOneDeclaration<FeatureOptions>(
+      "features", [](SlamConfig& c) -> FeatureOptions& { return c.pipeline.features; });
+  checked += expectOneDeclaration<FilterOptions>(
+      "filter", [](SlamConfig& c) -> FilterOptions& { return c.pipeline.filter; });
+  checked += expectOneDeclaration<AssociationOptions>(
+      "association", [](SlamConfig& c) -> AssociationOptions& { return c.pipeline.association; });
+  checked += expectOneDeclaration<PipelineOptions>(
+      "pipeline", [](SlamConfig& c) -> PipelineOptions& { return c.pipeline; });
+  checked += expectOneDeclaration<ScanMatcherOptions>(
+      "scan_matching",
+      [](SlamConfig& c) -> ScanMatcherOptions& { return c.pipeline.scan_matching; });
+  checked += expectOneDeclaration<MotionNoiseOptions>(
+      "scan_matching.motion_noise",
+      [](SlamConfig& c) -> MotionNoiseOptions& { return c.pipeline.scan_matched_motion_noise; });
+  checked += expectOneDeclaration<LoopClosureOptions>(
+      "loop_closure", [](SlamConfig& c) -> LoopClosureOptions& { return c.pipeline.loop_closure; });
+  checked += expectOneDeclaration<FullSmootherOptions>(
+      "smoother", [](SlamConfig& c) -> FullSmootherOptions& { return c.pipeline.smoother; });
+  checked += expectOneDeclaration<OccupancyGridOptions>(
+      "map", [](SlamConfig& c) -> OccupancyGridOptions& { return c.map; });
+  checked += expectOneDeclaration<InputOptions>(
+      "input", [](SlamConfig& c) -> InputOptions& { return c.input; });
+  EXPECT_GT(checked, 120) << "numeric fields with a finite bound";
 }
 
 // A small bag as the Freiburg logs are laid out: /scan, /odom, /tf_static.

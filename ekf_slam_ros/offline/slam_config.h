@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/mapping/occupancy_grid.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 
@@ -22,6 +23,17 @@ struct InputOptions {
   std::string odom_frame = "odom";
   std::string base_frame = "base_link";
   double max_odometry_gap = 0.5;  // s: larger gaps between odometry samples are not interpolated
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.text("scan_topic", scan_topic, {});
+    v.text("odom_topic", odom_topic, {});
+    v.text("odometry_source", odometry_source, {"odom", "tf"});
+    v.text("odom_frame", odom_frame, {});
+    v.text("base_frame", base_frame, {});
+    v.number("max_odometry_gap", max_odometry_gap, Bounds::above(0.0, "s"));
+  }
+  std::string validate() const { return checkFields(*this); }
 };
 
 struct SlamConfig {

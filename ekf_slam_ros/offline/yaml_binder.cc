@@ -1,7 +1,9 @@
 #include "ekf_slam_ros/offline/yaml_binder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 namespace ekf_slam {
@@ -36,75 +38,83 @@ void YamlBinder::record(const char* key, const std::string& value) {
   if (values_) values_->emplace_back(keyPath(key), value);
 }
 
-void YamlBinder::number(const char* key, double* value, double min, double max) {
+void YamlBinder::number(const char* key, double& value, const Bounds& bounds) {
   known_.insert(key);
   struct Record {
     YamlBinder* b;
     const char* key;
     const double* value;
     ~Record() { b->record(key, exact(*value)); }
-  } recorder{this, key, value};
+  } recorder{this, key, &value};
   if (!node_ || !node_[key]) return;
   try {
     const double v = node_[key].as<double>();
-    if (!std::isfinite(v) || v < min || v > max) {
+    if (!bounds.admits(v)) {
       std::ostringstream m;
-      m << keyPath(key) << ": must be in [" << min << ", " << max << "], got " << v;
+      m << keyPath(key) << ": must be " << bounds.text() << ", got " << v;
       error(m.str());
       return;
     }
-    *value = v;
+    value = v;
   } catch (const YAML::Exception&) {
     error(keyPath(key) + ": must be a number");
   }
 }
 
-void YamlBinder::integer(const char* key, int* value, int min, int max) {
-  long v = *value;
-  integer(key, &v, min, max);
-  *value = static_cast<int>(v);
+void YamlBinder::integer(const char* key, int& value, const Bounds& bounds) {
+  long v = value;
+  // Whatever the declaration says, an int holds no more than this.
+  Bounds within = bounds;
+  within.min = std::max(within.min, static_cast<double>(std::numeric_limits<int>::min()));
+  within.max = std::min(within.max, static_cast<double>(std::numeric_limits<int>::max()));
+  integer(key, v, within);
+  value = static_cast<int>(v);
 }
 
-void YamlBinder::integer(const char* key, long* value, long min, long max) {
+void YamlBinder::integer(const char* key, long& value, const Bounds& bounds) {
   known_.insert(key);
   struct Record {
     YamlBinder* b;
     const char* key;
     const long* value;
     ~Record() { b->record(key, std::to_string(*value)); }
-  } recorder{this, key, value};
+  } recorder{this, key, &value};
   if (!node_ || !node_[key]) return;
   try {
     const long v = node_[key].as<long>();
-    if (v < min || v > max) {
-      error(keyPath(key) + ": must be in [" + std::to_string(min) + ", " + std::to_string(max) +
-            "], got " + std::to_string(v));
+    if (!bounds.admits(static_cast<double>(v))) {
+      error(keyPath(key) + ": must be " + bounds.text() + ", got " + std::to_string(v));
       return;
     }
-    *value = v;
+    value = v;
   } catch (const YAML::Exception&) {
     error(keyPath(key) + ": must be an integer");
   }
 }
 
-void YamlBinder::boolean(const char* key, bool* value) {
+void YamlBinder::flag(const char* key, bool& value) {
   known_.insert(key);
   struct Record {
     YamlBinder* b;
     const char* key;
     const bool* value;
     ~Record() { b->record(key, *value ? "true" : "false"); }
-  } recorder{this, key, value};
+  } recorder{this, key, &value};
   if (!node_ || !node_[key]) return;
   try {
-    *value = node_[key].as<bool>();
+    value = node_[key].as<bool>();
   } catch (const YAML::Exception&) {
     error(keyPath(key) + ": must be true or false");
   }
 }
 
-void YamlBinder::text(const char* key, std::string* value,
-                      const std::vector<std::string>& allowed) {
+void YamlBinder::text(const char* key, std::string& value,
+                      std::initializer_list<const char*> allowed) {
+  oneOf(key, &value, std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void YamlBinder::oneOf(const char* key, std::string* value,
+                       const std::vector<std::string>& allowed) {
   known_.insert(key);
   struct Record {
     YamlBinder* b;
