@@ -20,7 +20,10 @@
 // is a separate estimate published as map → odom (REP-105).
 // Every output is stamped with the scan's stamp (data time), so bag replay
 // with use_sim_time gives the same stamps as the live run.
-// Topics, services and parameters: docs/live_system.md.
+// Topics, services and parameters: docs/live_system.md. The class is
+// spread over one file per concern: slam_node_input.cc, slam_node.cc
+// (processing), slam_node_outputs.cc, slam_node_services.cc and
+// slam_node_diagnostics.cc.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -66,6 +69,13 @@ enum class DropReason {
   kPaused,                 // the pause service was called
   kBadFeatures,            // a features message with unknown kinds or unusable values
 };
+constexpr DropReason kAllDropReasons[] = {
+    DropReason::kStampNotIncreasing,   DropReason::kStampInFuture,
+    DropReason::kTooFewValidReadings,  DropReason::kBadScanGeometry,
+    DropReason::kOdomTransformMissing, DropReason::kLaserTransformMissing,
+    DropReason::kQueueOverflow,        DropReason::kPaused,
+    DropReason::kBadFeatures,
+};
 const char* toString(DropReason reason);
 
 class SlamNode {
@@ -84,11 +94,12 @@ class SlamNode {
     ros::Time received;  // for the tf wait (clock time: data or sim)
   };
 
+  // --- input (slam_node_input.cc): checks, the queue waiting for tf, drops.
   void onScan(const sensor_msgs::LaserScan::ConstPtr& message);
+  void onFeatures(const Features::ConstPtr& message);
   // rviz's "2D Pose Estimate": the filter restarts at the given pose, the
   // current landmarks (or the loaded map) as its prior.
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);
-  void onFeatures(const Features::ConstPtr& message);
   // Common to both inputs: the clock and pause checks (false: dropped).
   bool acceptingInput();
   void enqueue(PendingInput pending);
@@ -99,31 +110,37 @@ class SlamNode {
   // its publisher is alive and the scan waits for the next sample.
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
               Pose2* pose, std::string* why, bool* behind = nullptr) const;
-  void process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser);
   void drop(DropReason reason, const std::string& detail);
 
+  // --- processing (slam_node.cc): the pipeline and one input through it.
   void createPipeline(const Pose2& laser_pose);
+  void process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser);
+  void resetState();
+
+  // --- outputs (slam_node_outputs.cc): map → odom, paths, maps.
   void publishMapToOdom(const ros::Time& data_stamp);
+  void onTfTimer(const ros::TimerEvent&);
   void publishLoopClosedPath(const ros::Time& data_stamp);
   void onMapTimer(const ros::TimerEvent&);
   void publishLandmarkMap(const std_msgs::Header& header);
-  void onTfTimer(const ros::TimerEvent&);
-  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  // The grid last published on `map` (live map, ~smooth or a loaded map);
+  // false when there is none.
+  bool currentGrid(nav_msgs::OccupancyGrid* map) const;
+  void publishNodeGrid(const nav_msgs::OccupancyGrid& map);
 
+  // --- services (slam_node_services.cc).
   bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
   bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
-  void resetState();
   // The pose (map frame) and covariance the next pipeline starts at; empty
   // when the pose and covariance are unusable, else the problem.
   std::string setStartPose(const Pose2& pose, const Matrix3& covariance);
-  // The grid last published on `map` (live map, ~smooth or a loaded map);
-  // false when there is none.
-  bool currentGrid(nav_msgs::OccupancyGrid* map) const;
-  void publishNodeGrid(const nav_msgs::OccupancyGrid& map);
+
+  // --- diagnostics (slam_node_diagnostics.cc).
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   SlamNodeParams params_;
   SlamConfig config_;

@@ -1,0 +1,100 @@
+// ekf_slam_node's /diagnostics: inputs, drops by reason, the filter's
+// health, the back end and the map.
+#include "ekf_slam_ros/slam_node/slam_node.h"
+
+#include <sstream>
+
+#include "ekf_slam_core/filter/chi_square.h"
+
+namespace ekf_slam {
+
+void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const ros::WallTime now = ros::WallTime::now();
+  const double period = (now - last_diagnostic_time_).toSec();
+  const long iterations = pipeline_ ? pipeline_->counters().iterations : 0;
+  const double rate =
+      period > 0.0 ? std::max(0L, iterations - iterations_at_last_diagnostic_) / period : 0.0;
+  iterations_at_last_diagnostic_ = iterations;
+  last_diagnostic_time_ = now;
+
+  long drops = 0;
+  for (const auto& [reason, count] : drops_) {
+    if (reason != DropReason::kPaused) drops += count;
+  }
+  const PipelineCounters counters = pipeline_ ? pipeline_->counters() : PipelineCounters{};
+  const long pipeline_rejects = counters.time_not_increasing + counters.odometry_jumps +
+                                counters.bad_input + counters.update_failures;
+  drops += pipeline_rejects;
+
+  double nis_average = 0.0;
+  for (double nis : nis_window_) nis_average += nis;
+  const int samples = static_cast<int>(nis_window_.size());
+  if (samples > 0) nis_average /= samples;
+  bool nis_inside = true;
+  if (samples > 0) {
+    const ChiSquareBand band = averageChiSquareBand(2.0, samples, 0.95);
+    nis_inside = nis_average >= band.lower && nis_average <= band.upper;
+    std::ostringstream text;
+    text.precision(3);
+    text << "[" << band.lower << ", " << band.upper << "]";
+    status.add("NIS 95% band", text.str());
+  } else {
+    status.add("NIS 95% band", "no matches yet");
+  }
+  status.add("scan matches refused (disagree with the wheels)",
+             counters.scan_match_odometry_refusals);
+  status.add("scan matches refused (all reasons)", counters.scan_match_refusals);
+  if (pipeline_ && pipeline_->loopCloser()) {
+    const LoopClosureCounters& loops = pipeline_->loopCloser()->counters();
+    status.add("key scans", loops.key_scans);
+    status.add("loops accepted", loops.accepted);
+    status.add("loop candidates refused", loops.refused);
+    status.add("loops refused as inconsistent", loops.inconsistent);
+    status.add("wide-window matches never confirmed", loops.unconfirmed);
+    status.add("filter re-anchored", counters.reanchors);
+  }
+  if (live_map_) {
+    status.add("maps published", live_map_->published());
+    status.add("last map build [s]", live_map_->lastBuildSeconds());
+  }
+
+  if (paused_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused");
+  } else if (drops > drops_at_last_diagnostic_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   std::to_string(drops - drops_at_last_diagnostic_) +
+                       " inputs rejected since the last report (see counters)");
+  } else if (!nis_inside) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "average NIS outside its 95% band (filter inconsistent)");
+  } else if (!pipeline_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first scan");
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
+  }
+  drops_at_last_diagnostic_ = drops;
+
+  status.add("paused", paused_);
+  status.add("localize only", localize_only_);
+  status.add("relocalisations (initialpose)", relocalisations_);
+  status.add("scans received", scans_received_);
+  status.add("scans processed", pipeline_ ? counters.scans : 0L);
+  status.add("iterations", iterations);
+  status.addf("iteration rate (Hz)", "%.2f", rate);
+  status.add("landmarks", pipeline_ ? pipeline_->filter().landmarkCount() : 0);
+  status.add("state size", pipeline_ ? pipeline_->filter().stateDim() : EkfSlam::kPoseDim);
+  status.addf("NIS average", "%.3f", nis_average);
+  status.add("NIS samples", samples);
+  for (const auto& [reason, count] : drops_) {
+    status.add(std::string("dropped: ") + toString(reason), count);
+  }
+  status.add("dropped tf: stamp in the future", tf_listener_.refusedFuture());
+  status.add("dropped tf: invalid", tf_listener_.refusedInvalid());
+  status.add("rejected by filter: time not increasing", counters.time_not_increasing);
+  status.add("rejected by filter: odometry jump", counters.odometry_jumps);
+  status.add("rejected by filter: bad input", counters.bad_input);
+  status.add("rejected by filter: update refused", counters.update_failures);
+  status.add("laser pose changes", laser_pose_changes_);
+}
+
+}  // namespace ekf_slam

@@ -1,0 +1,240 @@
+// ekf_slam_node's services: ~pause, ~resume, ~reset, ~save_map, ~load_map
+// and ~smooth.
+#include "ekf_slam_ros/slam_node/slam_node.h"
+
+#include <nav_msgs/OccupancyGrid.h>
+#include <unistd.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <sstream>
+
+#include "ekf_slam_core/io/grid_map_file.h"
+#include "ekf_slam_core/mapping/occupancy_grid.h"
+#include "ekf_slam_ros/conversions/grid_conversion.h"
+#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ekf_slam_ros/slam_node/slam_messages.h"
+
+namespace ekf_slam {
+namespace {
+
+using ros_conversions::fromPoseMessage;
+using ros_conversions::toPoseMessage;
+
+// The occupancy grid saved beside a landmark map: "office.yaml" →
+// "office_grid.yaml" (+ "office_grid.pgm").
+std::string gridPathFor(const std::string& landmark_path) {
+  const std::string suffix = ".yaml";
+  const bool yaml =
+      landmark_path.size() > suffix.size() &&
+      landmark_path.compare(landmark_path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return (yaml ? landmark_path.substr(0, landmark_path.size() - suffix.size()) : landmark_path) +
+         "_grid.yaml";
+}
+
+}  // namespace
+
+bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  paused_ = true;
+  queue_.clear();
+  response.success = true;
+  response.message = "paused: scans are dropped until resume";
+  ROS_INFO("ekf_slam_node: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  paused_ = false;
+  response.success = true;
+  response.message = "resumed";
+  ROS_INFO("ekf_slam_node: resumed");
+  return true;
+}
+
+bool SlamNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  resetState();
+  seed_map_.reset();
+  start_pose_.reset();
+  node_grid_.reset();
+  hold_loaded_grid_ = false;
+  if (live_map_) live_map_->forget();
+  localize_only_ = params_.localize_only;
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  publishLandmarkMap(header);
+  path_.header.stamp = last_scan_stamp_;
+  path_publisher_.publish(path_);
+  response.success = true;
+  response.message = "reset: empty map; the next scan starts a new one";
+  ROS_INFO("ekf_slam_node: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
+  if (request.path.empty()) {
+    response.success = false;
+    response.message = "path is empty";
+    return true;
+  }
+  LandmarkMapFile map;
+  if (pipeline_) {
+    map = toLandmarkMapFile(pipeline_->filter(), params_.map_frame);
+  } else if (seed_map_) {
+    map = *seed_map_;
+  } else {
+    map.frame = params_.map_frame;
+  }
+  // The grid first: a failure leaves the landmark file as it was. Each file
+  // is replaced atomically; a map saved without a grid drops the grid an
+  // earlier save left at that path, so that a load never pairs the two.
+  const std::string grid_path = gridPathFor(request.path);
+  nav_msgs::OccupancyGrid grid;
+  std::string grid_note;
+  if (currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
+    const std::string error = writeGridMap(grid_path, ros_conversions::toGridMapFile(grid));
+    if (!error.empty()) {
+      response.success = false;
+      response.message = error + " (nothing saved)";
+      ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
+      return true;
+    }
+    response.grid_path = grid_path;
+    grid_note = " and the " + std::to_string(grid.info.width) + " x " +
+                std::to_string(grid.info.height) + " occupancy grid to " + grid_path;
+  } else {
+    std::remove(grid_path.c_str());
+    grid_note = "; no occupancy grid yet (nothing published on map)";
+  }
+  const std::string error = writeLandmarkMap(request.path, map);
+  response.success = error.empty();
+  response.message = error.empty() ? std::to_string(map.landmarks.size()) +
+                                         " landmarks written to " + request.path + grid_note
+                                   : error;
+  ROS_INFO("ekf_slam_node: save_map: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
+  response.success = false;
+  response.landmarks = 0;
+  auto refuse = [&](const std::string& problem) {
+    response.message = problem + " (the current map is kept)";
+    ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
+    return true;
+  };
+  LandmarkMapFile map;
+  std::string error = readLandmarkMap(request.path, &map);
+  if (!error.empty()) return refuse(error);
+  // The grid saved beside it, if there is one: a broken one refuses the load.
+  const std::string grid_path = gridPathFor(request.path);
+  std::optional<GridMapFile> grid;
+  if (::access(grid_path.c_str(), F_OK) == 0) {
+    grid.emplace();
+    error = readGridMap(grid_path, &*grid);
+    if (!error.empty()) return refuse(error);
+  }
+  Pose2 start;
+  Matrix3 start_covariance = Matrix3::Zero();
+  if (request.set_pose) {
+    start = fromPoseMessage(request.pose.pose);
+    start_covariance = ros_conversions::planarCovariance(request.pose.covariance);
+  }
+  if (map.frame != params_.map_frame) {
+    ROS_WARN("ekf_slam_node: load_map: the file's frame '%s' differs from map_frame '%s'",
+             map.frame.c_str(), params_.map_frame.c_str());
+  }
+  // The filter restarts at the given pose (the map origin by default) with
+  // the loaded landmarks as a prior, uncorrelated with the pose.
+  error = setStartPose(start, start_covariance);
+  if (!error.empty()) return refuse("pose: " + error);
+  resetState();
+  seed_map_ = map;
+  localize_only_ = request.localize_only;
+  if (laser_pose_) createPipeline(*laser_pose_);
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  publishLandmarkMap(header);
+  hold_loaded_grid_ = false;
+  if (grid) {
+    publishNodeGrid(ros_conversions::toOccupancyGridMessage(*grid, header));
+    hold_loaded_grid_ = localize_only_;  // mapping on: the live map takes over
+  }
+  response.success = true;
+  response.landmarks = static_cast<int>(map.landmarks.size());
+  std::ostringstream text;
+  text.setf(std::ios::fixed);
+  text.precision(3);
+  text << map.landmarks.size() << " landmarks loaded from " << request.path;
+  if (grid) text << " and a " << grid->width << " x " << grid->height << " grid from " << grid_path;
+  text << "; the robot starts at (" << start.x << ", " << start.y << ", " << radToDeg(start.theta)
+       << " deg)" << (localize_only_ ? "; localisation only" : "; mapping continues");
+  response.message = text.str();
+  ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
+  return true;
+}
+
+std::string SlamNode::setStartPose(const Pose2& pose, const Matrix3& covariance) {
+  if (!pose.allFinite()) return "not finite";
+  const Matrix3 symmetric = 0.5 * (covariance + covariance.transpose());
+  if (!symmetric.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9) ||
+      Eigen::SelfAdjointEigenSolver<Matrix3>(symmetric).eigenvalues().minCoeff() < 0.0) {
+    return "the (x, y, yaw) covariance is not finite, symmetric and positive semi-definite";
+  }
+  PipelineOptions options = config_.pipeline;
+  options.initial_pose = pose;
+  options.initial_pose_covariance = symmetric;
+  const std::string error = options.validate();
+  if (!error.empty()) return error;
+  start_pose_ = pose;
+  start_covariance_ = symmetric;
+  return "";
+}
+
+bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  if (!pipeline_ || pipeline_->scans().empty()) {
+    response.success = false;
+    response.message = "no scans processed yet";
+    return true;
+  }
+  const std::vector<StampedPose> smoothed = pipeline_->smoothedScanPoses();
+  std_msgs::Header header;
+  header.stamp = last_scan_stamp_;
+  header.frame_id = params_.map_frame;
+  nav_msgs::Path path;
+  path.header = header;
+  OccupancyGrid grid(config_.map);
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = ros::Time(smoothed[i].stamp);
+    p.header.frame_id = params_.map_frame;
+    p.pose = toPoseMessage(smoothed[i].pose);
+    path.poses.push_back(p);
+    if (i < stored_scans_.size()) {
+      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[i].toScan());
+    }
+  }
+  smoothed_path_publisher_.publish(path);
+  if (stored_scans_.empty()) {
+    // input: features: the node never saw the ranges a grid is cast from.
+    response.success = true;
+    response.message = "smoothed " + std::to_string(smoothed.size()) +
+                       " scan poses; no occupancy grid (input is features: no scans stored)";
+    ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
+    return true;
+  }
+
+  publishNodeGrid(toOccupancyGridMessage(grid, header));
+
+  std::ostringstream text;
+  text << "smoothed " << smoothed.size() << " scan poses (" << pipeline_->counters().iterations
+       << " iterations); map " << grid.width() << " x " << grid.height() << " cells at "
+       << grid.resolution() << " m";
+  response.success = true;
+  response.message = text.str();
+  ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
+  return true;
+}
+
+}  // namespace ekf_slam
