@@ -112,7 +112,7 @@ void LoopCloser::addScan(double stamp, const Scan& scan, const Pose2& laser_pose
 void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end) {
   KeyScan key;
   key.front_end = front_end;
-  key.points = points;
+  key.points = std::make_shared<const std::vector<Vector2>>(points);
   key.sparse = thinned(points, options_.search_point_spacing);
   key.scan_index = static_cast<int>(scans_.size());  // its ScanEntry is pushed next
   ++counters_.key_scans;
@@ -310,12 +310,12 @@ std::vector<int> LoopCloser::pickCandidates(int key, const std::vector<double>& 
 }
 
 std::vector<Vector2> LoopCloser::queryPoints(int key, bool sparse) const {
-  if (options_.query_keys == 0) return sparse ? keys_[key].sparse : keys_[key].points;
+  if (options_.query_keys == 0) return sparse ? keys_[key].sparse : *keys_[key].points;
   const Pose2& origin = graph_.pose(key);
   std::vector<Vector2> merged;
   for (int m = key; m >= std::max(0, key - options_.query_keys); --m) {
     const Pose2 placement = between(origin, graph_.pose(m));
-    for (const Vector2& p : keys_[m].points) merged.push_back(transformFrom(placement, p));
+    for (const Vector2& p : *keys_[m].points) merged.push_back(transformFrom(placement, p));
   }
   return gridThinned(merged, sparse ? options_.search_point_spacing : icp_.min_point_spacing);
 }
@@ -338,7 +338,7 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   for (int m = std::max(0, candidate - options_.submap_half_width);
        m <= std::min(last, candidate + options_.submap_half_width); ++m) {
     const Pose2 placement = between(origin, graph_.pose(m));
-    for (const Vector2& p : keys_[m].points) submap.push_back(transformFrom(placement, p));
+    for (const Vector2& p : *keys_[m].points) submap.push_back(transformFrom(placement, p));
   }
   const std::vector<Vector2> query = queryPoints(key, false);
   if (static_cast<int>(query.size()) < icp_.min_correspondences) return false;

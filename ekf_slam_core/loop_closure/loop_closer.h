@@ -106,6 +106,11 @@ struct LoopClosureOptions {
   // In the pipeline: after each optimisation the EKF takes the loop-closed
   // geometry (robot and landmarks move with their key scans).
   bool reanchor_filter = true;
+  // When a correction of the back end takes effect, in scans (back_end.h):
+  // -1, as soon as the back end has it (a live node never waits for it;
+  // offline, at the scan that triggered it); d >= 0, at the d-th scan
+  // after the one that triggered it, the same live and offline.
+  int correction_delay = -1;
   PoseGraphOptions optimizer;
 
   template <class Visitor>
@@ -146,6 +151,7 @@ struct LoopClosureOptions {
     v.number("min_final_weight", min_final_weight, Bounds::closed(0.0, 1.0));
     v.number("consistency_probability", consistency_probability, Bounds::closedOpen(0.0, 1.0));
     v.flag("reanchor_filter", reanchor_filter);
+    v.integer("correction_delay", correction_delay, Bounds::closed(-1, 100000, "scans"));
     v.section("optimizer", optimizer);
   }
 
@@ -202,17 +208,22 @@ class LoopCloser {
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
   int keyCount() const { return static_cast<int>(keys_.size()); }
   // A key scan's readings (≤ max_range, robot frame) and its scan's stamp.
-  const std::vector<Vector2>& keyPoints(int key) const { return keys_[key].points; }
+  const std::vector<Vector2>& keyPoints(int key) const { return *keys_[key].points; }
+  // The same points, shared: they never change once the key scan is taken.
+  std::shared_ptr<const std::vector<Vector2>> sharedKeyPoints(int key) const {
+    return keys_[key].points;
+  }
+  Pose2 keyFrontEnd(int key) const { return keys_[key].front_end; }
   double keyStamp(int key) const { return scans_[keys_[key].scan_index].stamp; }
 
  private:
   struct KeyScan {
-    Pose2 front_end;                    // front-end pose when it was taken
-    std::vector<Vector2> points;        // robot frame
-    std::vector<Vector2> sparse;        // thinned for the correlative search
-    double travel_from_previous = 0.0;  // m
-    int retry_after = 0;                // key index before which it is not tried again
-    int scan_index = -1;                // index of its scan in addScan order
+    Pose2 front_end;                                     // front-end pose when it was taken
+    std::shared_ptr<const std::vector<Vector2>> points;  // robot frame
+    std::vector<Vector2> sparse;                         // thinned for the correlative search
+    double travel_from_previous = 0.0;                   // m
+    int retry_after = 0;  // key index before which it is not tried again
+    int scan_index = -1;  // index of its scan in addScan order
   };
   struct ScanEntry {
     double stamp;

@@ -2,6 +2,8 @@
 // (sim::PolygonWorld), a drifting front end, and known true poses.
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 
+#include "ekf_slam_core/loop_closure/back_end.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -231,6 +233,93 @@ TEST(LoopCloser, InjectedFalseLoopsAreRefusedAndChangeNothing) {
   }
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(positionError(injected.closed.back(), injected.truth.back()), 0.15);
+}
+
+// The two laps through a LoopClosureBackEnd: the pose each scan is given
+// and the loops its view holds.
+struct BackEndRun {
+  std::vector<Pose2> causal;
+  std::vector<long> accepted_by, scans_seen;
+  std::vector<Pose2> closed;  // after finish()
+};
+
+BackEndRun runTwoLapsThroughBackEnd(bool own_thread, int delay) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(11);
+  const std::vector<Pose2> truth = twoLaps();
+  LoopClosureOptions options;
+  options.correction_delay = delay;
+  LoopClosureBackEnd back_end(options, ScanMatcherOptions(), own_thread);
+  BackEndRun run;
+  Pose2 front_end = truth.front();
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (i > 0) {
+      const Pose2 step = between(truth[i - 1], truth[i]);
+      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
+    }
+    const std::shared_ptr<const BackEndView> view =
+        back_end.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
+    run.causal.push_back(view->poseOf(front_end));
+    run.accepted_by.push_back(view->counters.accepted);
+    run.scans_seen.push_back(view->scans);
+  }
+  LoopCloser& closer = back_end.drained();
+  closer.finish();
+  for (const StampedPose& p : closer.scanPoses()) run.closed.push_back(p.pose);
+  return run;
+}
+
+void expectBitIdentical(const std::vector<Pose2>& a, const std::vector<Pose2>& b,
+                        const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_TRUE(a[i].x == b[i].x && a[i].y == b[i].y && a[i].theta == b[i].theta)
+        << what << ", scan " << i;
+  }
+}
+
+// Delay 0 is the synchronous back end: each scan sees the graph its own key
+// scan produced, exactly as LoopCloser::latestPose() gives it.
+TEST(LoopClosureBackEnd, DelayZeroIsTheSynchronousLoopCloser) {
+  const LoopRun sync = runTwoLaps(/*enabled=*/true);
+  const BackEndRun inline_run = runTwoLapsThroughBackEnd(/*own_thread=*/false, 0);
+  ASSERT_GT(sync.counters.accepted, 0);
+  expectBitIdentical(inline_run.causal, sync.causal, "inline, delay 0");
+  EXPECT_EQ(inline_run.accepted_by, sync.accepted_by);
+  expectBitIdentical(inline_run.closed, sync.closed, "final");
+}
+
+// The deterministic mode: on its own thread the back end gives every scan
+// the very view the inline run gives it, with the corrections d scans
+// after the scan that triggered them.
+TEST(LoopClosureBackEnd, OwnThreadGivesTheInlineViewsInTheDeterministicMode) {
+  const BackEndRun at_once = runTwoLapsThroughBackEnd(/*own_thread=*/false, 0);
+  for (const int delay : {0, 7}) {
+    const BackEndRun inline_run = runTwoLapsThroughBackEnd(/*own_thread=*/false, delay);
+    const BackEndRun threaded = runTwoLapsThroughBackEnd(/*own_thread=*/true, delay);
+    expectBitIdentical(threaded.causal, inline_run.causal, "threaded vs inline");
+    EXPECT_EQ(threaded.accepted_by, inline_run.accepted_by) << "delay " << delay;
+    expectBitIdentical(threaded.closed, inline_run.closed, "final");
+    // The corrections arrive exactly `delay` scans late.
+    for (size_t i = 0; i < at_once.accepted_by.size(); ++i) {
+      const long expected = i >= static_cast<size_t>(delay) ? at_once.accepted_by[i - delay] : 0;
+      ASSERT_EQ(inline_run.accepted_by[i], expected) << "delay " << delay << ", scan " << i;
+    }
+  }
+}
+
+// As soon as ready: the caller never waits for the back end, the views it
+// gets move forward only, and the back end ends with the graph of the
+// synchronous run (it saw the same scans in the same order).
+TEST(LoopClosureBackEnd, AsSoonAsReadyEndsWithTheSameGraph) {
+  const BackEndRun inline_run = runTwoLapsThroughBackEnd(/*own_thread=*/false, -1);
+  const BackEndRun threaded = runTwoLapsThroughBackEnd(/*own_thread=*/true, -1);
+  expectBitIdentical(threaded.closed, inline_run.closed, "final");
+  for (size_t i = 0; i < threaded.scans_seen.size(); ++i) {
+    ASSERT_LE(threaded.scans_seen[i], static_cast<long>(i) + 1);
+    if (i > 0) ASSERT_GE(threaded.scans_seen[i], threaded.scans_seen[i - 1]);
+  }
+  EXPECT_GT(inline_run.accepted_by.back(), 0);
 }
 
 TEST(LoopCloser, DisabledKeepsTheFrontEndTrajectory) {

@@ -83,9 +83,10 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
                         ? std::make_unique<ScanMatchingOdometry>(options.scan_matching,
                                                                  options.filter.motion_noise)
                         : nullptr),
-      loop_closer_(options.loop_closure.enabled
-                       ? std::make_unique<LoopCloser>(options.loop_closure, options.scan_matching)
-                       : nullptr),
+      back_end_(options.loop_closure.enabled
+                    ? std::make_unique<LoopClosureBackEnd>(
+                          options.loop_closure, options.scan_matching, options.back_end_thread)
+                    : nullptr),
       filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance) {
   full_recorder_.setPrior(options.initial_pose, options.initial_pose_covariance);
 }
@@ -130,18 +131,22 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   bool usable = false;
   auto record = [&]() {
     Pose2 causal = out.pose;
-    if (loop_closer_ && scan != nullptr) {
-      const long loops = loop_closer_->counters().accepted;
-      loop_closer_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
+    if (back_end_ && scan != nullptr) {
+      const int loop_scan = static_cast<int>(record_of_loop_scan_.size());
       record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
-      const Pose2 graph_pose = loop_closer_->latestPose();
+      pending_filtered_.push_back(out.pose);
+      for (int id : out.iteration.new_landmark_ids) landmark_scan_[id] = loop_scan;
+      view_ = back_end_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
+      const Pose2 graph_pose = view_->poseOf(odometry);
       if (!have_map_from_graph_) {
         map_from_graph_ = compose(out.pose, inverse(graph_pose));
         have_map_from_graph_ = true;
       }
       causal = compose(map_from_graph_, graph_pose);
-      trackKeyScans(out);
-      if (loop_closer_->counters().accepted != loops && options_.loop_closure.reanchor_filter) {
+      trackKeyScans();
+      const bool new_loops = view_->counters.accepted != loops_seen_;
+      loops_seen_ = view_->counters.accepted;
+      if (new_loops && options_.loop_closure.reanchor_filter) {
         reanchorFilter(causal, out.pose);
         const bool iterated = out.outcome == ScanOutcome::kIterated;
         out.pose = iterated ? filter_.pose() : deadReckoned(odometry);
@@ -166,7 +171,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     input_error = validateScan(*scan);
   } else if (scan_matcher_) {
     input_error = "features given without their scan, but scan matching (enabled) needs the scan";
-  } else if (loop_closer_) {
+  } else if (back_end_) {
     input_error = "features given without their scan, but loop closure (enabled) needs the scan";
   } else {
     input_error = validateFeatureSet(*features);
@@ -345,15 +350,22 @@ std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
   return out;
 }
 
-// Which key scan each landmark hangs off, and the filter's pose at each key
-// scan: a landmark hangs off the key scan current when it was created (the
-// pose it was measured from), so that a loop closure can move it with that
-// key scan.
-void SlamPipeline::trackKeyScans(const ScanResult& out) {
-  const long keys = loop_closer_->counters().key_scans;
-  while (static_cast<long>(key_filtered_.size()) < keys) key_filtered_.push_back(out.pose);
-  if (keys == 0) return;
-  for (int id : out.iteration.new_landmark_ids) landmark_key_[id] = static_cast<int>(keys) - 1;
+// The filter's pose at each key scan the back end reports (its pose when
+// that scan was processed, before any re-anchoring at it), so that a loop
+// closure can move each landmark with the key scan it hangs off (the newest
+// key scan at or before the scan that created it). The back end may report
+// a key scan scans after it was taken: the poses wait in pending_filtered_.
+void SlamPipeline::trackKeyScans() {
+  const BackEndView& view = *view_;
+  while (key_filtered_.size() < view.key_poses.size()) {
+    const long scan = view.key_scan_index[key_filtered_.size()];
+    key_filtered_.push_back(pending_filtered_[scan - pending_base_]);
+  }
+  // Every key scan before the view's scans is known now.
+  while (pending_base_ < view.scans && !pending_filtered_.empty()) {
+    pending_filtered_.pop_front();
+    ++pending_base_;
+  }
 }
 
 // After an optimisation of the back end, the filter takes the loop-closed
@@ -362,17 +374,18 @@ void SlamPipeline::trackKeyScans(const ScanResult& out) {
 // where the graph has it now. Later updates then agree with the closed
 // loop instead of pulling the robot back to the drifted map.
 void SlamPipeline::reanchorFilter(const Pose2& causal, const Pose2& published) {
-  const PoseGraph& graph = loop_closer_->graph();
+  const BackEndView& view = *view_;
   std::vector<Pose2> key_map(key_filtered_.size());
   for (size_t k = 0; k < key_filtered_.size(); ++k) {
-    key_map[k] = compose(map_from_graph_, graph.pose(static_cast<int>(k)));
+    key_map[k] = compose(map_from_graph_, view.key_poses[k]);
   }
   std::vector<std::pair<int, Pose2>> corrections;
   corrections.reserve(filter_.landmarks().size());
   for (const LandmarkInfo& info : filter_.landmarks()) {
-    const auto it = landmark_key_.find(info.id);
-    if (it == landmark_key_.end()) continue;
-    const int k = it->second;
+    const auto it = landmark_scan_.find(info.id);
+    if (it == landmark_scan_.end()) continue;
+    const int k = view.keyAtOrBefore(it->second);
+    if (k < 0) continue;
     corrections.emplace_back(info.id, compose(key_map[k], inverse(key_filtered_[k])));
   }
   filter_.reanchor(compose(causal, inverse(published)), corrections);
@@ -382,13 +395,13 @@ void SlamPipeline::reanchorFilter(const Pose2& causal, const Pose2& published) {
 
 std::vector<SlamPipeline::KeyScan> SlamPipeline::keyScans(bool with_points) const {
   std::vector<KeyScan> out;
-  if (!loop_closer_ || !have_map_from_graph_) return out;
-  const PoseGraph& graph = loop_closer_->graph();
-  out.resize(loop_closer_->keyCount());
-  for (int k = 0; k < loop_closer_->keyCount(); ++k) {
-    out[k].stamp = loop_closer_->keyStamp(k);
-    out[k].pose = compose(map_from_graph_, graph.pose(k));
-    if (with_points) out[k].points = loop_closer_->keyPoints(k);
+  if (!view_ || !have_map_from_graph_) return out;
+  const BackEndView& view = *view_;
+  out.resize(view.key_poses.size());
+  for (size_t k = 0; k < view.key_poses.size(); ++k) {
+    out[k].stamp = view.key_stamps[k];
+    out[k].pose = compose(map_from_graph_, view.key_poses[k]);
+    if (with_points) out[k].points = *view.key_points[k];
   }
   return out;
 }
@@ -401,11 +414,11 @@ std::vector<StampedPose> SlamPipeline::causalScanPoses() const {
 }
 
 void SlamPipeline::finishLoopClosure() {
-  if (loop_closer_) loop_closer_->finish();
+  if (back_end_) back_end_->drained().finish();
 }
 
 std::vector<StampedPose> SlamPipeline::optimizedScanPoses() const {
-  return loop_closer_ ? loop_closer_->scanPoses() : std::vector<StampedPose>();
+  return back_end_ ? back_end_->drained().scanPoses() : std::vector<StampedPose>();
 }
 
 std::vector<StampedPose> SlamPipeline::scanPosesFrom(
@@ -434,12 +447,13 @@ std::vector<StampedPose> SlamPipeline::rtsScanPoses() const {
 // loop becomes a constraint between two iteration poses with those offsets.
 std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
   std::vector<IterationConstraint> out;
-  if (!loop_closer_) return out;
-  const PoseGraph& graph = loop_closer_->graph();
+  if (!back_end_) return out;
+  const LoopCloser& closer = back_end_->drained();
+  const PoseGraph& graph = closer.graph();
   for (const PoseGraphEdge& edge : graph.edges()) {
     if (!edge.robust || !edge.active) continue;  // sequential edge, or a dropped loop
-    const int from_scan = loop_closer_->keyScanIndex(edge.from);
-    const int to_scan = loop_closer_->keyScanIndex(edge.to);
+    const int from_scan = closer.keyScanIndex(edge.from);
+    const int to_scan = closer.keyScanIndex(edge.to);
     if (from_scan < 0 || to_scan < 0 ||
         from_scan >= static_cast<int>(record_of_loop_scan_.size()) ||
         to_scan >= static_cast<int>(record_of_loop_scan_.size())) {
@@ -467,8 +481,8 @@ std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
 // optimised pose, moved into the map frame (the filter's first pose).
 std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
   std::vector<Pose2> out;
-  if (!loop_closer_ || records_.empty()) return out;
-  const std::vector<StampedPose> optimized = loop_closer_->scanPoses();
+  if (!back_end_ || records_.empty()) return out;
+  const std::vector<StampedPose> optimized = back_end_->drained().scanPoses();
   std::vector<int> loop_scan_of_record(records_.size(), -1);
   for (size_t i = 0; i < record_of_loop_scan_.size() && i < optimized.size(); ++i) {
     loop_scan_of_record[record_of_loop_scan_[i]] = static_cast<int>(i);

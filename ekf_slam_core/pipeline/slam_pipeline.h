@@ -22,6 +22,7 @@
 //   from the odometry origin: no iteration, counted as bad input.
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -31,6 +32,7 @@
 #include "ekf_slam_core/filter/slam_iteration.h"
 #include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/stamped_pose.h"
+#include "ekf_slam_core/loop_closure/back_end.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/full_smoother.h"
@@ -56,6 +58,11 @@ struct PipelineOptions {
   // /initialpose).
   Pose2 initial_pose;
   Matrix3 initial_pose_covariance = Matrix3::Zero();
+  // Run the loop-closing back end on a thread of its own (a live node:
+  // scan processing never waits for a loop search or an optimisation,
+  // unless loop_closure.correction_delay asks it to); false: inline, as the
+  // offline runner does. Not a file setting: the program decides.
+  bool back_end_thread = false;
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
@@ -210,7 +217,7 @@ class SlamPipeline {
   // ScanRecord::causal for every scan: what a live run publishes.
   std::vector<StampedPose> causalScanPoses() const;
 
-  // The back end's key scans as they stand now (loop-closed, map frame),
+  // The back end's key scans as the last scan saw them (loop-closed, map frame),
   // with their readings in the robot frame: for a live occupancy grid and
   // the loop-closed path. Empty without loop closure.
   struct KeyScan {
@@ -220,16 +227,23 @@ class SlamPipeline {
   };
   std::vector<KeyScan> keyScans(bool with_points) const;
   // Optimisations the back end has run: a change means new key-scan poses.
-  long backEndOptimisations() const {
-    return loop_closer_ ? loop_closer_->counters().optimisations : 0;
+  long backEndOptimisations() const { return view_ ? view_->counters.optimisations : 0; }
+  // The back end's counters as the last scan saw them (zero without loop closure).
+  LoopClosureCounters backEndCounters() const {
+    return view_ ? view_->counters : LoopClosureCounters();
   }
+  // Scans handed to the back end that it has not processed yet (its own
+  // thread only; inline it is always 0).
+  long backEndBacklog() const { return back_end_ ? back_end_->backlog() : 0; }
 
   // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
   // the final optimisation after the last scan; optimizedScanPoses() then
   // gives one pose per scan (empty when loop closure is off).
   void finishLoopClosure();
   std::vector<StampedPose> optimizedScanPoses() const;
-  const LoopCloser* loopCloser() const { return loop_closer_.get(); }
+  // The loop closer itself, once it has processed every scan (waits for
+  // the back end's thread); null without loop closure.
+  const LoopCloser* loopCloser() const { return back_end_ ? &back_end_->drained() : nullptr; }
 
  private:
   // One input: a scan (features extracted here) or features extracted
@@ -241,7 +255,7 @@ class SlamPipeline {
   Pose2 deadReckoned(const Pose2& odometry) const;
   Matrix3 deadReckonedCovariance(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
-  void trackKeyScans(const ScanResult& out);
+  void trackKeyScans();
   void reanchorFilter(const Pose2& causal, const Pose2& published);
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;
@@ -249,13 +263,17 @@ class SlamPipeline {
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
-  std::unique_ptr<LoopCloser> loop_closer_;             // null when disabled
+  std::unique_ptr<LoopClosureBackEnd> back_end_;        // null when loop closure is off
+  std::shared_ptr<const BackEndView> view_;             // the back end as the last scan saw it
+  long loops_seen_ = 0;                                 // accepted loops in that view
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;
   std::vector<int> record_of_loop_scan_;  // records_ index of each scan given to the loop closer
   std::vector<Pose2> key_filtered_;       // the filter's pose at each key scan (map frame)
-  std::unordered_map<int, int> landmark_key_;  // landmark id → key scan it hangs off
+  std::deque<Pose2> pending_filtered_;    // the filter's pose at loop scans pending_base_ …
+  long pending_base_ = 0;                 // … on, whose key scans the back end may still report
+  std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
   bool have_map_from_graph_ = false;  // map_from_graph_ is set (at the first recorded scan)
   Pose2 map_from_graph_;              // the loop closer's frame in the map frame
   PipelineCounters counters_;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "ekf_slam_core/sim/landmark_simulator.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 
@@ -296,6 +298,68 @@ TEST(SlamPipeline, AnInitialPoseMovesTheWholeEstimateRigidly) {
   // A pose the filter cannot use is refused by the options' check.
   moved_options.initial_pose.x = std::nan("");
   EXPECT_NE(moved_options.validate().find("initial_pose"), std::string::npos);
+}
+
+// One and a half laps around the island of the carton room with drifting
+// odometry, through the whole pipeline (scan matching, filter, back end):
+// the causal pose of every scan and the filtered one.
+struct IslandRun {
+  std::vector<StampedPose> causal, filtered;
+  long loops = 0, reanchors = 0;
+};
+
+IslandRun driveAroundTheIsland(bool back_end_thread, int correction_delay) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(5);
+  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/true);
+  options.loop_closure.enabled = true;
+  options.loop_closure.min_loop_travel = 6.0;
+  options.loop_closure.correction_delay = correction_delay;
+  options.back_end_thread = back_end_thread;
+  SlamPipeline pipeline(options);
+  const double radius = 2.3, step = 0.08;
+  const int scans = static_cast<int>(1.5 * 2.0 * kPi * radius / step);
+  Pose2 odometry;
+  Pose2 previous;
+  for (int i = 0; i <= scans; ++i) {
+    const double a = step * i / radius;
+    const Pose2 truth(3.0 + radius * std::sin(a), 1.5 - radius * std::cos(a), a);
+    if (i > 0) odometry = compose(odometry, compose(between(previous, truth), Pose2(0, 0, 0.002)));
+    previous = truth;
+    pipeline.processScan(scanAt(world, compose(truth, laser), 0.1 * i, &rng), odometry);
+  }
+  IslandRun run;
+  run.causal = pipeline.causalScanPoses();
+  run.filtered = pipeline.filteredScanPoses();
+  run.loops = pipeline.backEndCounters().accepted;
+  run.reanchors = pipeline.counters().reanchors;
+  return run;
+}
+
+void expectSamePoses(const std::vector<StampedPose>& a, const std::vector<StampedPose>& b,
+                     const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_TRUE(a[i].pose.x == b[i].pose.x && a[i].pose.y == b[i].pose.y &&
+                a[i].pose.theta == b[i].pose.theta)
+        << what << ", scan " << i;
+  }
+}
+
+// The back end on its own thread, in the deterministic mode, gives every
+// scan the causal and filtered pose of the inline run, loop corrections
+// and re-anchoring included: a live node and the offline runner agree.
+TEST(SlamPipeline, BackEndThreadGivesTheInlineAnswerInTheDeterministicMode) {
+  for (const int delay : {0, 4}) {
+    const IslandRun inline_run = driveAroundTheIsland(/*back_end_thread=*/false, delay);
+    const IslandRun threaded = driveAroundTheIsland(/*back_end_thread=*/true, delay);
+    EXPECT_GT(inline_run.loops, 0) << "delay " << delay;
+    EXPECT_GT(inline_run.reanchors, 0) << "delay " << delay;
+    EXPECT_EQ(threaded.loops, inline_run.loops);
+    expectSamePoses(threaded.causal, inline_run.causal, "causal");
+    expectSamePoses(threaded.filtered, inline_run.filtered, "filtered");
+  }
 }
 
 // Features from outside can be corrupt; the filter would invert a bad

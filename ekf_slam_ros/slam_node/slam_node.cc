@@ -107,6 +107,7 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   config_.pipeline.filter.laser_pose = laser_pose;
   laser_pose_ = laser_pose;
   PipelineOptions options = config_.pipeline;
+  options.back_end_thread = true;  // scan processing never waits for a loop search
   if (start_pose_) {
     options.initial_pose = *start_pose_;
     options.initial_pose_covariance = start_covariance_;

@@ -44,8 +44,10 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("scan matches refused (disagree with the wheels)",
              counters.scan_match_odometry_refusals);
   status.add("scan matches refused (all reasons)", counters.scan_match_refusals);
-  if (pipeline_ && pipeline_->loopCloser()) {
-    const LoopClosureCounters& loops = pipeline_->loopCloser()->counters();
+  if (pipeline_ && config_.pipeline.loop_closure.enabled) {
+    // As the last scan saw the back end (never waits for its thread).
+    const LoopClosureCounters loops = pipeline_->backEndCounters();
+    status.add("back-end backlog (scans)", pipeline_->backEndBacklog());
     status.add("key scans", loops.key_scans);
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);

@@ -7,7 +7,10 @@ one core (taskset -c --core), and `rosbag play --clock -r RATE`. Measures
 on the wall clock:
 - per-scan latency: from the scan's arrival on /scan to the arrival of the
   pose the node publishes for it (same stamp): conversion, tf wait, the
-  pipeline (features, scan matching, filter, back end), publication;
+  pipeline (features, scan matching, filter; the back end runs on its own
+  thread), publication;
+- how far the back end lags: the largest backlog of scans handed to it and
+  not processed yet, sampled on /diagnostics once a second;
 - the largest gap between two map -> odom transforms on /tf;
 - the map thread: grids published, and the last build time (/diagnostics);
 - scans the node dropped (every "dropped: ..." counter) and scans it never
@@ -49,6 +52,7 @@ class Probe:
         self.maps = 0
         self.map_build = float("nan")
         self.scans = 0
+        self.backlog = 0
         rospy.Subscriber("scan", LaserScan, self.on_scan, queue_size=10000)
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
@@ -77,6 +81,8 @@ class Probe:
                     self.maps = int(float(kv.value))
                 elif kv.key == "last map build [s]":
                     self.map_build = float(kv.value)
+                elif kv.key == "back-end backlog (scans)":
+                    self.backlog = max(self.backlog, int(float(kv.value)))
 
 
 def main():
@@ -122,8 +128,9 @@ def main():
                                   1e3 * percentile(probe.latency, 99),
                                   1e3 * max(probe.latency or [float("nan")]), len(probe.latency)))
         print("largest gap between map -> odom transforms: %.1f ms" % (1e3 * max(gaps or [0])))
-        print("back end: runs inside each scan's processing (its cost is in the latency above);"
-              " map thread: %d grids, last built in %.2f s" % (probe.maps, probe.map_build))
+        print("back end (own thread): largest backlog %d scans (sampled once a second);"
+              " map thread: %d grids, last built in %.2f s"
+              % (probe.backlog, probe.maps, probe.map_build))
         dropped = sum(probe.drops.values())
         print("dropped by the node: %d %s; never answered: %d"
               % (dropped, {k: v for k, v in probe.drops.items() if v}, len(probe.scan_wall)))
