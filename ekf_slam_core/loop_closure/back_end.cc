@@ -37,8 +37,11 @@ LoopClosureBackEnd::LoopClosureBackEnd(const LoopClosureOptions& options,
 LoopClosureBackEnd::~LoopClosureBackEnd() {
   if (!own_thread_) return;
   {
+    // Scans still waiting are dropped: whoever destroys the back end (a
+    // reset, the node shutting down) has no use for their results.
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
+    inputs_.clear();
   }
   work_.notify_all();
   worker_.join();
@@ -104,11 +107,6 @@ std::shared_ptr<const BackEndView> LoopClosureBackEnd::addScan(double stamp, con
   return views_.front();
 }
 
-std::shared_ptr<const BackEndView> LoopClosureBackEnd::latest() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return views_.back();
-}
-
 long LoopClosureBackEnd::backlog() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return handed_ - processed_;
@@ -124,7 +122,7 @@ void LoopClosureBackEnd::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     work_.wait(lock, [this] { return stop_ || !inputs_.empty(); });
-    if (inputs_.empty()) return;  // stop_, nothing left
+    if (stop_) return;
     Input input = std::move(inputs_.front());
     inputs_.pop_front();
     busy_ = true;

@@ -62,8 +62,6 @@ class LoopClosureBackEnd {
                                              const Pose2& laser_pose, const Pose2& front_end,
                                              bool usable);
 
-  // The newest view (never waits).
-  std::shared_ptr<const BackEndView> latest() const;
   // Scans handed over that the back end has not processed yet.
   long backlog() const;
 

@@ -2,6 +2,7 @@
 // markers built from a filter, and the conversions to this package's
 // messages.
 #include "ekf_slam_ros/slam_node/slam_messages.h"
+#include "ekf_slam_ros/slam_node/processing_times.h"
 
 #include <gtest/gtest.h>
 
@@ -20,6 +21,19 @@ Matrix2 rotated(double sigma_major, double sigma_minor, double angle) {
   const Matrix2 r = Eigen::Rotation2Dd(angle).toRotationMatrix();
   return r * Vector2(sigma_major * sigma_major, sigma_minor * sigma_minor).asDiagonal() *
          r.transpose();
+}
+
+// The percentiles /diagnostics reports, from 0.1 ms bins.
+TEST(ProcessingTimes, PercentilesFromTheBins) {
+  ProcessingTimes times;
+  EXPECT_EQ(times.percentile(50.0), 0.0);
+  for (int i = 1; i <= 100; ++i) times.add(i * 1e-3);  // 1 … 100 ms
+  times.add(20.0);                                     // beyond the last bin
+  EXPECT_EQ(times.count(), 101);
+  EXPECT_NEAR(times.percentile(50.0), 0.051, 1.5e-4);
+  EXPECT_NEAR(times.percentile(99.0), 0.100, 1.5e-4);
+  EXPECT_DOUBLE_EQ(times.max(), 20.0);
+  EXPECT_NEAR(times.percentile(100.0), 10.0, 1e-9) << "the last bin holds the longer ones";
 }
 
 TEST(CovarianceEllipse, SemiAxesAreSqrtOfChiSquareTimesEigenvalues) {

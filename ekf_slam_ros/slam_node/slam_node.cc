@@ -4,6 +4,7 @@
 // slam_node_services.cc, slam_node_diagnostics.cc.
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
+#include <chrono>
 #include <cmath>
 
 #include "ekf_slam_ros/conversions/pose_conversion.h"
@@ -147,6 +148,14 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
     }
   }
 
+  const auto started = std::chrono::steady_clock::now();
+  struct Timer {  // the whole of this function from here: pipeline and publication
+    std::chrono::steady_clock::time_point start;
+    ProcessingTimes* times;
+    ~Timer() {
+      times->add(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+  } timer{started, processing_times_.get()};
   const size_t records_before = pipeline_->scans().size();
   const ScanResult result = pending.scan ? pipeline_->processScan(*pending.scan, odometry)
                                          : pipeline_->processFeatures(pending.header.stamp.toSec(),

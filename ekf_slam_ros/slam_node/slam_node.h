@@ -52,6 +52,7 @@
 #include "ekf_slam_ros/offline/slam_config.h"
 #include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
 #include "ekf_slam_ros/slam_node/live_map.h"
+#include "ekf_slam_ros/slam_node/processing_times.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 
 namespace ekf_slam {
@@ -211,6 +212,9 @@ class SlamNode {
   };
   std::map<DropReason, DropLog> last_drop_log_;
   long scans_received_ = 0;
+  // Wall time of each input's processing (pipeline and publication; not the
+  // tf wait before it), over the whole run.
+  std::unique_ptr<ProcessingTimes> processing_times_ = std::make_unique<ProcessingTimes>();
   long iterations_at_last_diagnostic_ = 0;
   ros::WallTime last_diagnostic_time_;
   std::deque<double> nis_window_;  // the last nis_window NIS values

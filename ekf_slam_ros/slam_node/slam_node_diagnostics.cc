@@ -81,6 +81,9 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("relocalisations (initialpose)", relocalisations_);
   status.add("scans received", scans_received_);
   status.add("scans processed", pipeline_ ? counters.scans : 0L);
+  status.add("processing time p50 [ms]", 1e3 * processing_times_->percentile(50.0));
+  status.add("processing time p99 [ms]", 1e3 * processing_times_->percentile(99.0));
+  status.add("processing time max [ms]", 1e3 * processing_times_->max());
   status.add("iterations", iterations);
   status.addf("iteration rate (Hz)", "%.2f", rate);
   status.add("landmarks", pipeline_ ? pipeline_->filter().landmarkCount() : 0);

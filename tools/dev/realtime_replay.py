@@ -5,10 +5,13 @@ whether it keeps up.
 Starts its own roscore (port --port) with use_sim_time, slam.launch pinned to
 one core (taskset -c --core), and `rosbag play --clock -r RATE`. Measures
 on the wall clock:
+- per-scan processing time, as the node measures it (/diagnostics, over
+  the whole run): the pipeline (features, scan matching, filter; the back
+  end runs on its own thread) and the publication;
 - per-scan latency: from the scan's arrival on /scan to the arrival of the
-  pose the node publishes for it (same stamp): conversion, tf wait, the
-  pipeline (features, scan matching, filter; the back end runs on its own
-  thread), publication;
+  pose the node publishes for it (same stamp): the processing and the wait
+  for the scan's transforms (a log whose odometry pauses while the robot
+  stands holds its scans until the next odometry sample);
 - how far the back end lags: the largest backlog of scans handed to it and
   not processed yet, sampled on /diagnostics once a second;
 - the largest gap between two map -> odom transforms on /tf;
@@ -53,6 +56,7 @@ class Probe:
         self.map_build = float("nan")
         self.scans = 0
         self.backlog = 0
+        self.processing = {}  # "p50" / "p99" / "max" -> ms
         rospy.Subscriber("scan", LaserScan, self.on_scan, queue_size=10000)
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
@@ -81,6 +85,8 @@ class Probe:
                     self.maps = int(float(kv.value))
                 elif kv.key == "last map build [s]":
                     self.map_build = float(kv.value)
+                elif kv.key.startswith("processing time "):
+                    self.processing[kv.key.split()[2]] = float(kv.value)
                 elif kv.key == "back-end backlog (scans)":
                     self.backlog = max(self.backlog, int(float(kv.value)))
 
@@ -123,6 +129,8 @@ def main():
         gaps = [b - a for a, b in zip(probe.tf_wall, probe.tf_wall[1:])]
         print("log: %s at %gx on core %d: %d scans in %.1f s of wall-clock"
               % (os.path.basename(args.bag), args.rate, args.core, probe.scans, played))
+        print("per-scan processing time: p50 %.1f ms, p99 %.1f ms, max %.1f ms"
+              % tuple(probe.processing.get(k, float("nan")) for k in ("p50", "p99", "max")))
         print("per-scan latency (scan in -> pose out): p50 %.1f ms, p99 %.1f ms, max %.1f ms"
               " over %d scans" % (1e3 * percentile(probe.latency, 50),
                                   1e3 * percentile(probe.latency, 99),
