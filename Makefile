@@ -12,6 +12,7 @@ WS    ?= $(CACHE)/ws
 BENCH_WS ?= $(CACHE)/bench_ws
 FUZZ_WS ?= $(CACHE)/fuzz_ws
 SAN_WS ?= $(CACHE)/sanitize_ws
+TSAN_WS ?= $(CACHE)/tsan_ws
 FUZZ_SECONDS ?= 60
 FUZZ_RUNS ?=
 FUZZ_TARGETS ?=
@@ -25,7 +26,7 @@ RVIZ  ?= 0
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench benchmark fuzz sanitize format check clean
+.PHONY: all deps workspace build test demo bench benchmark fuzz sanitize sanitize-thread format check clean
 
 all: build
 
@@ -96,6 +97,21 @@ sanitize: deps
 	@cd $(SAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DEKF_SLAM_SANITIZE=ON tests ekf_slam_offline \
 	  > $(SAN_WS)/build.log 2>&1 || { tail -n 60 $(SAN_WS)/build.log; exit 1; }
 	@tools/ci/run_sanitized_tests.sh $(SAN_WS) $(OUT)/sanitize
+
+# The gtests that run the back end on its own thread, under ThreadSanitizer
+# (any report fails the run).
+TSAN_TESTS := ekf_slam_core_loop_closure_test ekf_slam_core_pipeline_test
+sanitize-thread: deps
+	@mkdir -p $(TSAN_WS)/src
+	@if [ ! -e $(TSAN_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(TSAN_WS)/src/ekf_slam; fi
+	@cd $(TSAN_WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DEKF_SLAM_SANITIZE_THREAD=ON $(TSAN_TESTS) > $(TSAN_WS)/build.log 2>&1 \
+	  || { tail -n 60 $(TSAN_WS)/build.log; exit 1; }
+	@for t in $(TSAN_TESTS); do \
+	  TSAN_OPTIONS=halt_on_error=1 $(TSAN_WS)/devel/lib/ekf_slam/$$t > $(TSAN_WS)/$$t.log 2>&1 \
+	    && echo "sanitize-thread: $$t passed, no report" \
+	    || { tail -n 40 $(TSAN_WS)/$$t.log; echo "sanitize-thread: $$t FAILED"; exit 1; }; \
+	done
 
 format:
 	@tools/ci/check_format.sh --fix
