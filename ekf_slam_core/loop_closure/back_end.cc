@@ -50,8 +50,9 @@ LoopClosureBackEnd::~LoopClosureBackEnd() {
 void LoopClosureBackEnd::publish() {
   ++processed_;
   const LoopClosureCounters& counters = closer_.counters();
-  if (closer_.keyCount() == key_count_ && counters.optimisations == optimisations_ &&
-      counters.candidates == candidates_ && counters.unconfirmed == unconfirmed_) {
+  // The graph and the counters change only when a key scan is added (its
+  // loop search) or the graph is optimised.
+  if (closer_.keyCount() == key_count_ && counters.optimisations == optimisations_) {
     return;  // the newest view still holds
   }
   auto view = std::make_shared<BackEndView>();
@@ -72,8 +73,6 @@ void LoopClosureBackEnd::publish() {
   }
   key_count_ = keys;
   optimisations_ = counters.optimisations;
-  candidates_ = counters.candidates;
-  unconfirmed_ = counters.unconfirmed;
   views_.push_back(std::move(view));
   // Only the deterministic mode asks for older views, never for one older
   // than the scan the caller is at minus the delay.

@@ -96,8 +96,6 @@ class LoopClosureBackEnd {
   long processed_ = 0;   // scans the closer has processed
   long key_count_ = -1;  // of the newest view …
   long optimisations_ = -1;
-  long candidates_ = -1;
-  long unconfirmed_ = -1;
   // Views by the scan count they hold after, oldest first: the newest, and
   // those a deterministic caller may still ask for.
   std::deque<std::shared_ptr<const BackEndView>> views_;
