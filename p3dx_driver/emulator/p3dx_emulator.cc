@@ -26,7 +26,9 @@ Pose2 arc(double distance, double turn) {
 }
 
 constexpr double kDegToRad = ekf_slam::kPi / 180.0;
-constexpr double kMaxSubstep = 0.01;  // s
+constexpr double kMaxSubstep = 0.01;          // s
+constexpr double kContactRelease = 0.01;      // m moved since a contact that frees the bumper
+constexpr double kContactReleaseTurn = 0.35;  // rad (20 degrees) turned since it
 
 }  // namespace
 
@@ -84,6 +86,8 @@ void P3dxEmulator::step(double now) {
     integrate(slice);
     dt -= slice;
     stalled_now_ = blocked_;
+    front_bumped_now_ = contact_front_;
+    rear_bumped_now_ = contact_rear_;
   }
 
   if (state_ == State::kOpen && now >= next_sip_) {
@@ -116,11 +120,28 @@ void P3dxEmulator::integrate(double dt) {
   const double turn = rotational_velocity_ * dt;
   if (distance == 0.0 && turn == 0.0) return;
   const Pose2 proposed = ekf_slam::compose(true_pose_, arc(distance, turn));
-  if (options_.faults.stalled || (motion_hook_ && !motion_hook_(true_pose_, proposed))) {
+  if (options_.faults.stalled) {
     blocked_ = true;
     return;  // the wheels do not turn: neither the pose nor the encoders change
   }
+  // Against a wall the wheels stall and the bumper ring on the side the
+  // robot drove to is pressed. It stays pressed (the wall stays) until the
+  // robot backs away from it, or has moved 1 cm or turned 20 degrees since.
+  if (motion_hook_ && !motion_hook_(true_pose_, proposed)) {
+    blocked_ = true;
+    if (distance > 0.0) contact_front_ = true;
+    if (distance < 0.0) contact_rear_ = true;
+    travel_since_contact_ = turn_since_contact_ = 0.0;
+    return;
+  }
   true_pose_ = proposed;
+  travel_since_contact_ += std::abs(distance);
+  turn_since_contact_ += std::abs(turn);
+  if (distance < 0.0) contact_front_ = false;
+  if (distance > 0.0) contact_rear_ = false;
+  if (travel_since_contact_ > kContactRelease || turn_since_contact_ > kContactReleaseTurn) {
+    contact_front_ = contact_rear_ = false;
+  }
 
   double left = distance - turn * track / 2.0;
   double right = distance + turn * track / 2.0;
@@ -301,7 +322,11 @@ void P3dxEmulator::sendSip() {
   sip.left_velocity = static_cast<int16_t>(std::lround(v_mm - w_mm));
   sip.right_velocity = static_cast<int16_t>(std::lround(v_mm + w_mm));
   sip.battery_decivolts = static_cast<uint8_t>(std::lround(options_.battery_volts * 10.0));
-  sip.stall_bump = stalled_now_ ? 0x0101 : 0;
+  // Stall bits 0 (left) and 8 (right); the five segments of each bumper
+  // ring at bits 1-5 (rear) and 9-13 (front).
+  sip.stall_bump =
+      static_cast<uint16_t>((stalled_now_ ? 0x0101 : 0) | (front_bumped_now_ ? 0x1F << 9 : 0) |
+                            (rear_bumped_now_ ? 0x1F << 1 : 0));
   sip.flags = (motors_enabled_ ? 0x0001 : 0) | (sonar_enabled_ ? 0x001E : 0);
   if (sonar_enabled_) {
     for (uint8_t i = 0; i < 16; ++i) sip.sonars.push_back({i, 5000});

@@ -77,7 +77,8 @@ class P3dxEmulator {
   double targetRotationalVelocity() const { return target_rotational_velocity_; }
 
   // Called for every motion increment with the current and proposed true
-  // pose; returning false blocks the motion (the robot stalls), as a wall does.
+  // pose; returning false blocks the motion (the robot stalls, and the bumper
+  // ring on the side it drives to is pressed), as a wall does.
   void setMotionHook(std::function<bool(const ekf_slam::Pose2&, const ekf_slam::Pose2&)> hook) {
     motion_hook_ = std::move(hook);
   }
@@ -123,6 +124,9 @@ class P3dxEmulator {
   bool sonar_enabled_ = true;
   bool stalled_now_ = false;  // reported in SIPs
   bool blocked_ = false;      // an increment of the current step was blocked
+  bool contact_front_ = false, contact_rear_ = false;             // … driving forward / backward
+  double travel_since_contact_ = 0.0, turn_since_contact_ = 0.0;  // m, rad
+  bool front_bumped_now_ = false, rear_bumped_now_ = false;       // reported in SIPs
   double last_step_ = -1.0;
   double last_command_ = 0.0;
   double next_sip_ = 0.0;

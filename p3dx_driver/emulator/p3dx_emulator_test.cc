@@ -137,6 +137,46 @@ TEST_F(EmulatorTest, MotionHookBlocksMotionAndReportsAStall) {
   }
   ASSERT_TRUE(found);
   EXPECT_TRUE(sip.leftStall() && sip.rightStall());
+  EXPECT_EQ(sip.frontBumpers(), 0x1F);  // driving forward into it
+  EXPECT_EQ(sip.rearBumpers(), 0);
+  // Stopped against it: no stall any more, the bumper still pressed.
+  send(encodeCommand(Command::kVel, 0));
+  run(&robot, 3.0, 5.0);
+  replies();
+  run(&robot, 5.0, 5.2);
+  for (const Bytes& payload : replies()) parseStandardSip(payload.data(), payload.size(), &sip);
+  EXPECT_FALSE(sip.leftStall() || sip.rightStall());
+  EXPECT_EQ(sip.frontBumpers(), 0x1F);
+  // Backing away frees the robot: no stall, no bumper.
+  send(encodeCommand(Command::kVel, -100));
+  run(&robot, 5.2, 7.0);
+  replies();
+  run(&robot, 7.0, 7.2);
+  found = false;
+  for (const Bytes& payload : replies()) {
+    if (parseStandardSip(payload.data(), payload.size(), &sip) == SipError::kNone) found = true;
+  }
+  ASSERT_TRUE(found);
+  EXPECT_FALSE(sip.leftStall() || sip.rightStall());
+  EXPECT_EQ(sip.frontBumpers(), 0);
+  EXPECT_LT(robot.truePose().x, 0.0);
+}
+
+TEST_F(EmulatorTest, BackingIntoSomethingPressesTheRearBumper) {
+  P3dxEmulator robot(&stream_, EmulatorOptions{});
+  robot.setMotionHook(
+      [](const ekf_slam::Pose2&, const ekf_slam::Pose2& to) { return to.x > -0.1; });
+  open(&robot);
+  send(encodeCommand(Command::kVel, -200));
+  run(&robot, 0.0, 3.0);
+  StandardSip sip;
+  bool found = false;
+  for (const Bytes& payload : replies()) {
+    if (parseStandardSip(payload.data(), payload.size(), &sip) == SipError::kNone) found = true;
+  }
+  ASSERT_TRUE(found);
+  EXPECT_EQ(sip.rearBumpers(), 0x1F);
+  EXPECT_EQ(sip.frontBumpers(), 0);
 }
 
 TEST_F(EmulatorTest, WheelNoiseMakesOdometryDriftFromTheTruth) {

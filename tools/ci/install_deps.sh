@@ -28,6 +28,8 @@ PACKAGES=(
   python3-matplotlib python3-numpy python3-yaml
   # rviz (sim.launch rviz:=true) and its headless smoke test / screenshot
   rviz xvfb x11-apps
+  # the robot's frames (robot.launch) and the description's check
+  ros-robot-state-publisher liburdfdom-tools
   "$@"
 )
 
