@@ -7,6 +7,8 @@
 #include <sstream>
 #include <vector>
 
+#include "ekf_slam_core/io/atomic_file.h"
+
 namespace ekf_slam {
 namespace calibration {
 namespace {
@@ -94,6 +96,23 @@ std::string loadLaserMount(const std::string& path, LaserMount* mount) {
   if (!reader.errors().empty()) return reader.errors();
   *mount = read;
   return "";
+}
+
+std::string saveLaserMount(const std::string& path, const LaserMount& mount,
+                           const std::string& comment) {
+  std::ostringstream text;
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) text << "# " << line << "\n";
+  text.setf(std::ios::fixed);
+  text.precision(4);
+  text << "parent_frame: " << mount.parent_frame << "\n"
+       << "child_frame: " << mount.child_frame << "\n"
+       << "x: " << mount.x << "     # m, forward\n"
+       << "y: " << mount.y << "     # m, left\n"
+       << "z: " << mount.z << "     # m, up (display only)\n";
+  text.precision(5);
+  text << "yaw: " << mount.yaw << "   # rad, counter-clockwise\n";
+  return writeFileAtomically(path, text.str());
 }
 
 }  // namespace calibration

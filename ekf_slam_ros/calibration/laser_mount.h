@@ -28,5 +28,11 @@ struct LaserMount {
 // must not silently leave the laser at the origin).
 std::string loadLaserMount(const std::string& path, LaserMount* mount);
 
+// Writes `mount` to `path` in the same format, atomically (a failure leaves
+// an earlier file unchanged), with `comment` (one or more lines, may be
+// empty) as the file's heading. Returns "" on success, else the problem.
+std::string saveLaserMount(const std::string& path, const LaserMount& mount,
+                           const std::string& comment);
+
 }  // namespace calibration
 }  // namespace ekf_slam
