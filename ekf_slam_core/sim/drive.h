@@ -40,8 +40,10 @@ SimulatedDrive simulateDrive(const RayCaster& world, const std::vector<DriveSegm
 // every direction for the scan matcher.
 PolygonWorld roomWithCartons();
 
-// Straights, arcs both ways and turns on the spot, about 65 s from
-// (-3, -2, 0.3) in roomWithCartons(), never closer than 0.5 m to a wall.
+// Straights, arcs both ways and turns on the spot, 68 s (12.5 m, 1350°
+// of turns) from kMixedDriveStart in roomWithCartons(), the robot's centre
+// never nearer than 0.79 m to a wall or a carton.
+constexpr double kMixedDriveStartX = 0.0, kMixedDriveStartY = -1.0, kMixedDriveStartYaw = 0.0;
 std::vector<DriveSegment> mixedDrive();
 
 }  // namespace sim

@@ -65,7 +65,7 @@ void writeDrive(const std::string& path, const sim::SimulatedDrive& drive) {
 
 sim::SimulatedDrive simulate(const std::vector<sim::DriveSegment>& segments) {
   sim::DriveOptions options;
-  options.start = Pose2(-3.0, -2.0, 0.3);
+  options.start = Pose2(sim::kMixedDriveStartX, sim::kMixedDriveStartY, sim::kMixedDriveStartYaw);
   options.laser = kTrueLaser;
   options.seed = 4;
   return sim::simulateDrive(sim::roomWithCartons(), segments, options);
