@@ -78,16 +78,17 @@ int EkfSlam::slotOf(int id) const {
   return it == slot_of_id_.end() ? -1 : it->second;
 }
 
-FilterStatus EkfSlam::predict(const Pose2& odom_previous, const Pose2& odom_current, double dt) {
+FilterStatus EkfSlam::predict(const Pose2& odom_previous, const Pose2& odom_current, double dt,
+                              bool jump_check) {
   if (!odom_previous.allFinite() || !odom_current.allFinite()) return FilterStatus::kNonFiniteInput;
-  return predict(controlFromOdometry(odom_previous, odom_current), dt);
+  return predict(controlFromOdometry(odom_previous, odom_current), dt, jump_check);
 }
 
-FilterStatus EkfSlam::predict(const OdometryControl& u, double dt) {
+FilterStatus EkfSlam::predict(const OdometryControl& u, double dt, bool jump_check) {
   if (!u.allFinite() || !std::isfinite(dt)) return FilterStatus::kNonFiniteInput;
   if (!(dt > 0.0)) return FilterStatus::kBadTimeStep;
-  if (std::abs(u.trans) > options_.max_step_translation ||
-      std::abs(wrapAngle(u.rot1 + u.rot2)) > options_.max_step_rotation) {
+  if (jump_check && (std::abs(u.trans) > options_.max_step_translation ||
+                     std::abs(wrapAngle(u.rot1 + u.rot2)) > options_.max_step_rotation)) {
     return FilterStatus::kOdometryJump;
   }
   Matrix3 F, G;

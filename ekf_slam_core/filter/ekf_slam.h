@@ -92,9 +92,13 @@ class EkfSlam {
                    const Matrix3& initial_covariance = Matrix3::Zero());
 
   // Prediction from two successive odometry poses (§3.4.2) over dt seconds.
-  // Starts a new step (the step counter drives landmark bookkeeping).
-  FilterStatus predict(const Pose2& odom_previous, const Pose2& odom_current, double dt);
-  FilterStatus predict(const OdometryControl& u, double dt);
+  // Starts a new step (the step counter drives landmark bookkeeping). An
+  // increment beyond max_step_* is refused as a jump (kOdometryJump) unless
+  // `jump_check` is false: a move the caller knows was made (the robot
+  // driven while SLAM was paused), whose noise the model scales with it.
+  FilterStatus predict(const Pose2& odom_previous, const Pose2& odom_current, double dt,
+                       bool jump_check = true);
+  FilterStatus predict(const OdometryControl& u, double dt, bool jump_check = true);
 
   struct Prediction {
     RangeBearing z;      // predicted observation

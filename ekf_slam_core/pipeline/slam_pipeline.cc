@@ -182,7 +182,8 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       // The filter's jump rule on the raw increment, before it becomes the
       // match's guess: a corrupt sample must not carry the front end (and
       // the key scans of the back end) kilometres away.
-      if (scan_matcher_->isOdometryJump(raw_odometry, options_.filter.max_step_translation,
+      if (!accept_next_motion_ &&
+          scan_matcher_->isOdometryJump(raw_odometry, options_.filter.max_step_translation,
                                         options_.filter.max_step_rotation)) {
         scan_matcher_->reanchorRaw(raw_odometry);
         ++counters_.odometry_jumps;
@@ -265,7 +266,15 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
                            const Pose2& odometry, bool predict, double dt, ScanResult* out) {
   const OdometryControl control = controlFromOdometry(last_odometry_, odometry);
   if (predict) {
-    const FilterStatus status = filter_.predict(last_odometry_, odometry, dt);
+    const bool accept = accept_next_motion_;
+    const FilterStatus status = filter_.predict(last_odometry_, odometry, dt, !accept);
+    if (status == FilterStatus::kOk && accept) {
+      accept_next_motion_ = false;
+      if (std::abs(control.trans) > options_.filter.max_step_translation ||
+          std::abs(wrapAngle(control.rot1 + control.rot2)) > options_.filter.max_step_rotation) {
+        ++counters_.accepted_large_moves;
+      }
+    }
     if (status != FilterStatus::kOk) {
       const Pose2 motion = between(last_odometry_, odometry);
       std::ostringstream message;

@@ -147,6 +147,8 @@ struct PipelineCounters {
   long skipped_no_motion = 0;
   long time_not_increasing = 0;
   long odometry_jumps = 0;
+  long accepted_large_moves =
+      0;  // increments beyond the jump bounds taken after acceptNextMotion()
   long bad_input = 0;
   long update_failures = 0;  // iterations whose update was refused
   long observations = 0;     // landmark candidates offered to the filter
@@ -192,6 +194,13 @@ class SlamPipeline {
   // extractFeatures(scan) in gives bit-identical results. Scan matching needs
   // the scan itself: with scan_matching.enabled the input is rejected.
   ScanResult processFeatures(double stamp, const FeatureSet& features, const Pose2& odometry);
+
+  // The next iteration's odometry increment is a move that was made, not a
+  // jump, however large: the robot was driven while SLAM was paused (the
+  // node's ~resume and ~step, the supervised step mode). The front end and
+  // the filter take it as control; it is counted (accepted_large_moves when
+  // it exceeds the jump bounds).
+  void acceptNextMotion() { accept_next_motion_ = true; }
 
   const EkfSlam& filter() const { return filter_; }
   // For seeding a prior map (EkfSlam::addLandmark) and switching to
@@ -283,7 +292,8 @@ class SlamPipeline {
   Pose2 last_raw_odometry_;     // the robot's raw odometry at that iteration
   Pose2 current_raw_odometry_;  // the raw odometry of the scan being processed
   double last_stamp_ = 0.0;
-  Pose2 latest_odometry_;  // odometry at the latest scan
+  Pose2 latest_odometry_;            // odometry at the latest scan
+  bool accept_next_motion_ = false;  // acceptNextMotion(): no jump rule at the next iteration
 };
 
 }  // namespace ekf_slam

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "ekf_slam_core/sim/drive.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 
@@ -493,6 +494,60 @@ TEST(SlamPipeline, RaycastDriveBeatsOdometry) {
       EXPECT_LT(r.mean_smoothed_error, 0.03);
       EXPECT_LE(r.mean_smoothed_error, r.mean_filtered_error);
     }
+}
+
+}  // namespace
+}  // namespace ekf_slam
+
+namespace ekf_slam {
+namespace {
+
+// Supervised step mode: SLAM paused while the robot drives 2.1 m (more than
+// the filter's 1 m jump bound), then one iteration. After acceptNextMotion()
+// the move is control, with or without the scan-matching front end;
+// without it the increment is discarded as a jump and the pose stays behind.
+TEST(SlamPipeline, AMoveMadeWhilePausedIsKeptNotDroppedAsAJump) {
+  sim::DriveOptions drive_options;
+  drive_options.start = Pose2(0.0, -1.0, 0.0);
+  drive_options.laser = Pose2(0.16, 0.0, 0.0);
+  drive_options.seed = 8;
+  const sim::SimulatedDrive drive = sim::simulateDrive(
+      sim::roomWithCartons(), {{0.3, 0.0, 10.0}, {0.0, 0.4, 2.0}}, drive_options);
+  constexpr size_t kPausedFrom = 30, kPausedTo = 100;  // scans 30–99 (2.1 m) never reach SLAM
+  for (bool scan_matching : {true, false}) {
+    for (bool accept : {true, false}) {
+      PipelineOptions options;
+      options.filter.laser_pose = drive_options.laser;
+      options.scan_matching.enabled = scan_matching;
+      SlamPipeline pipeline(options);
+      for (size_t i = 0; i < kPausedFrom; ++i)
+        pipeline.processScan(drive.scans[i], drive.odometry[i]);
+      if (accept) pipeline.acceptNextMotion();
+      const ScanResult after =
+          pipeline.processScan(drive.scans[kPausedTo], drive.odometry[kPausedTo]);
+      const Pose2 truth = between(drive.truth.front(), drive.truth[kPausedTo]);
+      const double error = (after.pose.translation() - truth.translation()).norm();
+      SCOPED_TRACE(std::string(scan_matching ? "scan matching" : "odometry") +
+                   (accept ? ", accepted" : ", not accepted"));
+      if (accept) {
+        EXPECT_EQ(after.outcome, ScanOutcome::kIterated);
+        EXPECT_LT(error, 0.05);
+        EXPECT_EQ(pipeline.counters().accepted_large_moves, 1);
+        EXPECT_EQ(pipeline.counters().odometry_jumps, 0);
+        // Later scans go on from there.
+        for (size_t i = kPausedTo + 1; i < drive.scans.size(); ++i) {
+          const ScanResult r = pipeline.processScan(drive.scans[i], drive.odometry[i]);
+          EXPECT_LT(
+              (r.pose.translation() - between(drive.truth.front(), drive.truth[i]).translation())
+                  .norm(),
+              0.05);
+        }
+      } else {
+        EXPECT_GT(error, 1.5);  // the 2.1 m are lost
+        EXPECT_EQ(pipeline.counters().odometry_jumps, 1);
+      }
+    }
+  }
 }
 
 }  // namespace

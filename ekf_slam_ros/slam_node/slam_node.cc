@@ -50,6 +50,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
 
   services_.push_back(private_node_.advertiseService("pause", &SlamNode::onPause, this));
   services_.push_back(private_node_.advertiseService("resume", &SlamNode::onResume, this));
+  services_.push_back(private_node_.advertiseService("step", &SlamNode::onStep, this));
   services_.push_back(private_node_.advertiseService("reset", &SlamNode::onReset, this));
   services_.push_back(private_node_.advertiseService("smooth", &SlamNode::onSmooth, this));
   services_.push_back(private_node_.advertiseService("save_map", &SlamNode::onSaveMap, this));
@@ -163,6 +164,14 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   if (pending.scan && pipeline_->scans().size() > records_before) {
     stored_scans_.emplace_back(*pending.scan);
   }
+  if (step_pending_) {  // ~step: this was the one scan; pause until the next step
+    step_pending_ = false;
+    paused_ = true;
+    ++steps_done_;
+    queue_.clear();
+    ROS_INFO("ekf_slam_node: step %ld: scan at %.3f %s; paused", steps_done_,
+             pending.header.stamp.toSec(), toString(result.outcome));
+  }
   if (!result.message.empty()) {
     ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f %s: %s", pending.header.stamp.toSec(),
                       toString(result.outcome), result.message.c_str());
@@ -242,6 +251,7 @@ void SlamNode::resetState() {
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
   queue_.clear();
   last_accepted_stamp_.reset();
+  step_pending_ = false;
   stored_scans_.clear();
   path_.poses.clear();
   odometry_path_.poses.clear();

@@ -132,6 +132,9 @@ class SlamNode {
   // --- services (slam_node_services.cc).
   bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  // Supervised step mode (thesis §3.4.3): one iteration on the next scan,
+  // then paused again; the move made while paused is control, not a jump.
+  bool onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
@@ -180,6 +183,8 @@ class SlamNode {
   bool hold_loaded_grid_ = false;
   bool localize_only_ = false;
   bool paused_ = false;
+  bool step_pending_ = false;  // ~step: pause again after the next scan
+  long steps_done_ = 0;
   std::deque<PendingInput> queue_;
   std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
   // One per pipeline record, for the ~smooth grid (input: scan). The ranges

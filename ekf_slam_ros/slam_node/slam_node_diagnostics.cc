@@ -77,6 +77,9 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   drops_at_last_diagnostic_ = drops;
 
   status.add("paused", paused_);
+  status.add("steps (~step)", steps_done_);
+  if (pipeline_)
+    status.add("large moves made while paused, kept", pipeline_->counters().accepted_large_moves);
   status.add("localize only", localize_only_);
   status.add("relocalisations (initialpose)", relocalisations_);
   status.add("scans received", scans_received_);

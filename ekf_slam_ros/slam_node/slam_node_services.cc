@@ -36,6 +36,7 @@ std::string gridPathFor(const std::string& landmark_path) {
 
 bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
   paused_ = true;
+  step_pending_ = false;
   queue_.clear();
   response.success = true;
   response.message = "paused: scans are dropped until resume";
@@ -44,10 +45,25 @@ bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&
 }
 
 bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  // Whatever the robot did while paused is one move, however large: the
+  // next scan takes it as control instead of discarding it as a jump.
+  if (paused_ && pipeline_) pipeline_->acceptNextMotion();
   paused_ = false;
+  step_pending_ = false;
   response.success = true;
   response.message = "resumed";
   ROS_INFO("ekf_slam_node: resumed");
+  return true;
+}
+
+bool SlamNode::onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  if (paused_ && pipeline_) pipeline_->acceptNextMotion();
+  response.message =
+      paused_ ? "one iteration on the next scan, then paused" : "pausing after the next scan";
+  paused_ = false;
+  step_pending_ = true;
+  response.success = true;
+  ROS_INFO("ekf_slam_node: step: %s", response.message.c_str());
   return true;
 }
 

@@ -18,6 +18,17 @@ A non-zero command is re-sent at `~rate`; once stopped, a zero is sent for
 half a second and then nothing, so that another driver (the waypoint
 driver) can use cmd_vel_in and the P3-DX's own watchdog stays in charge.
 The command stops when the joystick falls silent for `~joy_timeout`.
+
+Supervised step mode (`~step_mode:=true`, the thesis's §3.4.3): SLAM is
+paused (`~slam_namespace`/pause) and each key press is one bounded move:
+w / s drive `~step_distance` forward / backward, a / d turn by
+`~step_angle`, measured on the odometry (`odom`). When the robot has come
+to rest, teleop calls `~slam_namespace`/step: SLAM runs one iteration on
+the next scan and pauses again. The next key is taken once SLAM's pose of
+that iteration has arrived (`pose`, 3 s at most), so that every iteration
+sees the robot at rest; keys pressed meanwhile are ignored. A move the
+safety gate cuts short ends after twice its time at the step speed plus
+2 s, and is iterated all the same.
 """
 import os
 import select
@@ -28,9 +39,20 @@ import threading
 import time
 import tty
 
+import math
+
 import rospy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Joy
+from std_srvs.srv import Trigger
+
+STEP_HELP = """\
+teleop, supervised step mode: SLAM iterates once after each move
+  w / s    one step forward / backward
+  a / d    one turn to the left / right
+  q        quit (SLAM stays paused: call its resume service)
+"""
 
 HELP = """\
 teleop: keys act in this terminal
@@ -48,6 +70,7 @@ KEYS = {"w": (1, 0), "s": (-1, 0), "a": (0, 1), "d": (0, -1),
 JS_EVENT = struct.Struct("<IhBB")  # time (ms), value, type, number: linux/joystick.h
 JS_BUTTON, JS_AXIS, JS_INIT = 0x01, 0x02, 0x80
 STOP_REPEAT = 0.5  # s of zero commands after a stop
+REST_TIME = 0.4    # s without odometry change: the robot is at rest (SIPs come every 0.1 s)
 
 
 def clamp(value, limit):
@@ -67,12 +90,22 @@ class Teleop:
         self.joy_enable_button = int(get("~joy_enable_button", 4))
         self.joy_timeout = float(get("~joy_timeout", 0.5))     # s
         self.joy_device = str(get("~joy_device", ""))
+        self.step_mode = bool(get("~step_mode", False))
+        self.step_distance = float(get("~step_distance", 0.25))  # m per step
+        self.step_angle = float(get("~step_angle", math.radians(15.0)))  # rad per turn
+        self.step_speed = float(get("~step_speed", 0.2))          # m/s while stepping
+        self.step_turn_rate = float(get("~step_turn_rate", 0.4))  # rad/s while stepping
+        self.slam_namespace = str(get("~slam_namespace", "/ekf_slam"))
         problems = [name for name, value in (("max_linear", self.max_linear),
                                              ("max_angular", self.max_angular),
                                              ("linear_step", self.linear_step),
                                              ("angular_step", self.angular_step),
                                              ("rate", self.rate),
-                                             ("joy_timeout", self.joy_timeout))
+                                             ("joy_timeout", self.joy_timeout),
+                                             ("step_distance", self.step_distance),
+                                             ("step_angle", self.step_angle),
+                                             ("step_speed", self.step_speed),
+                                             ("step_turn_rate", self.step_turn_rate))
                     if not value > 0.0]
         if problems:
             raise ValueError("parameters must be > 0: " + ", ".join(
@@ -84,6 +117,14 @@ class Teleop:
         self.joy_seen = 0.0
         self.publisher = rospy.Publisher("cmd_vel_in", Twist, queue_size=1)
         rospy.Subscriber("joy", Joy, self.on_joy, queue_size=5)
+        if self.step_mode:
+            self.odometry = None  # (x, y, yaw)
+            self.odometry_history = []  # (monotonic, (x, y, yaw)) over the last moments
+            self.move = None      # the step under way
+            self.steps = 0
+            self.slam_poses = 0   # SLAM poses received: one per iteration
+            rospy.Subscriber("odom", Odometry, self.on_odometry, queue_size=5)
+            rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_slam_pose, queue_size=5)
 
     # Commands ---------------------------------------------------------
     def set(self, linear, angular):
@@ -136,6 +177,117 @@ class Teleop:
     def status(self):
         with self.lock:
             return "v %+.2f m/s, w %+.2f rad/s" % (self.linear, self.angular)
+
+    # Supervised step mode ---------------------------------------------------
+    def on_odometry(self, message):
+        p, q = message.pose.pose.position, message.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        now = time.monotonic()
+        with self.lock:
+            self.odometry = (p.x, p.y, yaw)
+            self.odometry_history.append((now, self.odometry))
+            while self.odometry_history and self.odometry_history[0][0] < now - REST_TIME - 0.2:
+                self.odometry_history.pop(0)
+
+    def at_rest(self):
+        """The odometry pose has not changed (1 mm, 0.1°) over the last REST_TIME s."""
+        now = time.monotonic()
+        with self.lock:
+            recent = [pose for t, pose in self.odometry_history if t >= now - REST_TIME]
+            spans = bool(self.odometry_history) and self.odometry_history[0][0] <= now - REST_TIME
+        if not spans or len(recent) < 2:
+            return False
+        return all(math.hypot(p[0] - recent[-1][0], p[1] - recent[-1][1]) < 0.001 and
+                   abs(math.atan2(math.sin(p[2] - recent[-1][2]),
+                                  math.cos(p[2] - recent[-1][2]))) < 0.002 for p in recent)
+
+    def on_slam_pose(self, _):
+        with self.lock:
+            self.slam_poses += 1
+
+    def call_slam(self, name):
+        service = self.slam_namespace.rstrip("/") + "/" + name
+        try:
+            rospy.wait_for_service(service, timeout=5.0)
+            answer = rospy.ServiceProxy(service, Trigger)()
+            return answer.message
+        except (rospy.ROSException, rospy.ServiceException) as error:
+            rospy.logwarn("teleop: %s failed: %s", service, error)
+            return None
+
+    def step_key(self, name):
+        """Starts one bounded move for a key, unless one is under way."""
+        step = KEYS.get(name)
+        if step is None:
+            return
+        with self.lock:
+            if self.move is not None:
+                return  # one move at a time
+            if self.odometry is None:
+                rospy.logwarn_throttle(2.0, "teleop: no odometry on 'odom' yet: cannot step")
+                return
+            start = self.odometry
+        if step[0] != 0:
+            speed, target = step[0] * self.step_speed, self.step_distance
+            expected = self.step_distance / self.step_speed
+        else:
+            speed, target = step[1] * self.step_turn_rate, self.step_angle
+            expected = self.step_angle / self.step_turn_rate
+        with self.lock:
+            self.move = {"linear": step[0] != 0, "speed": speed, "target": target,
+                         "start": start, "began": time.monotonic(),
+                         "deadline": time.monotonic() + 2.0 * expected + 2.0, "stopping": None}
+
+    def step_tick(self):
+        """Drives the move under way; at rest, one SLAM iteration."""
+        with self.lock:
+            move, now_odometry = self.move, self.odometry
+        if move is None or now_odometry is None:
+            return
+        x0, y0, yaw0 = move["start"]
+        x, y, yaw = now_odometry
+        done = (math.hypot(x - x0, y - y0) if move["linear"]
+                else abs(math.atan2(math.sin(yaw - yaw0), math.cos(yaw - yaw0))))
+        now = time.monotonic()
+        if move["stopping"] is None:
+            if done < move["target"] and now < move["deadline"]:
+                twist = Twist()
+                if move["linear"]:
+                    twist.linear.x = move["speed"]
+                else:
+                    twist.angular.z = move["speed"]
+                self.publisher.publish(twist)
+                return
+            self.publisher.publish(Twist())
+            move["stopping"] = now
+            if done < move["target"]:
+                rospy.logwarn("teleop: step cut short at %.3f of %.3f (safety gate or stall)",
+                              done, move["target"])
+            return
+        if "iterating" in move:
+            # The next key waits for SLAM's iteration (its pose), so that it
+            # always sees the robot at rest; 3 s at most.
+            with self.lock:
+                iterated = self.slam_poses > move["poses_before"]
+            if iterated or now - move["iterating"] > 3.0:
+                unit = "m" if move["linear"] else "rad"
+                sys.stdout.write("\rstep %d: moved %.3f %s; SLAM %s\n" % (
+                    self.steps, move["done"], unit,
+                    "iterated" if iterated else "did not iterate within 3 s"))
+                sys.stdout.flush()
+                with self.lock:
+                    self.move = None
+            return
+        # At rest: the odometry still for REST_TIME (or 4 s at most).
+        self.publisher.publish(Twist())
+        if self.at_rest() or now - move["stopping"] > 4.0:
+            with self.lock:
+                move["poses_before"] = self.slam_poses
+            if self.call_slam("step") is None:
+                move["poses_before"] = -1  # no SLAM: do not wait for it
+            self.steps += 1
+            move["done"] = done
+            move["iterating"] = time.monotonic()
 
     # Joystick device ------------------------------------------------------
     def read_joystick_device(self):
@@ -196,10 +348,13 @@ def main():
         threading.Thread(target=teleop.read_joystick_device, daemon=True).start()
     keyboard = sys.stdin.isatty()
     saved = None
+    if teleop.step_mode:
+        answer = teleop.call_slam("pause")
+        rospy.loginfo("teleop: step mode; SLAM: %s", answer or "not reached")
     if keyboard:
         saved = termios.tcgetattr(sys.stdin)
         tty.setcbreak(sys.stdin.fileno())
-        sys.stdout.write(HELP)
+        sys.stdout.write(STEP_HELP if teleop.step_mode else HELP)
         sys.stdout.flush()
     elif not teleop.joy_device:
         rospy.loginfo("teleop: stdin is not a terminal: joystick on 'joy' only")
@@ -214,7 +369,14 @@ def main():
                     break
                 if name in ("q", "\x03"):
                     raise KeyboardInterrupt
-                teleop.key(name)
+                if teleop.step_mode:
+                    teleop.step_key(name)
+                else:
+                    teleop.key(name)
+            if teleop.step_mode:
+                teleop.step_tick()
+                time.sleep(max(0.0, period - (time.monotonic() - began)))
+                continue
             teleop.tick()
             if keyboard and teleop.status() != shown:
                 shown = teleop.status()
