@@ -12,6 +12,8 @@ Worlds:
   office_turned  the same with the cabinet in the top corridor and three
                  desks turned against the raster (the earlier office:
                  docs/results.md, "The pose NEES").
+  calibration_room  a room with a box corner ahead of the start, for the
+                 laser-mount calibration tools (docs/bringup.md).
 Each YAML carries `start_pose: [x, y, yaw]`, a free pose for the robot
 (map_server ignores the extra key).
 """
@@ -81,6 +83,18 @@ def office_turned():
     return office(turned=True)
 
 
+def calibration_room():
+    """An 8 m x 6 m room for the laser-mount calibration tools: a 1 m box
+    square to the raster whose convex corner stands 1.5 m ahead and 0.87 m
+    to the left of the start (30 degrees), so that both its faces stay well
+    in view while the robot drives 0.5 m towards it and turns by 30 degrees
+    either way, and two more boxes for the scan matcher."""
+    segments = closed([(-2.0, -3.0), (6.0, -3.0), (6.0, 3.0), (-2.0, 3.0)])
+    for x, y, w, h in [(2.0, 1.37, 1.0, 1.0), (4.5, -1.5, 0.8, 0.5), (-1.0, 2.0, 0.6, 0.6)]:
+        segments += closed(box(x, y, w, h))
+    return segments, (8.5, 6.5), (-2.25, -3.25), (0.0, 0.0, 0.0)
+
+
 def rasterise(segments, size, origin):
     width = int(round(size[0] / RESOLUTION))
     height = int(round(size[1] / RESOLUTION))
@@ -117,7 +131,8 @@ def write(out_dir, name, world):
     print("wrote %s (%d x %d cells)" % (name, width, height))
 
 
-WORLDS = {"carton_layout": carton_layout, "office": office, "office_turned": office_turned}
+WORLDS = {"carton_layout": carton_layout, "office": office, "office_turned": office_turned,
+          "calibration_room": calibration_room}
 
 
 def read_pgm(path):
