@@ -133,6 +133,21 @@ class RobotConfiguration(unittest.TestCase):
         nodes = run.stdout.split()
         self.assertIn("/robot_state_publisher", nodes)
         self.assertNotIn("/calibration_tf_publisher", nodes)
+        # SLAM on the robot: the built-in defaults with the P3-DX's odometry noise.
+        run = subprocess.run(["roslaunch", "--dump-params",
+                              os.path.join(PACKAGE, "launch", "robot.launch")],
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             universal_newlines=True)
+        self.assertEqual(run.returncode, 0, run.stdout)
+        self.assertIn("ekf_slam_p3dx.yaml", run.stdout)
+        printed = subprocess.run(["rosrun", "ekf_slam", "ekf_slam_offline", "--config",
+                                  os.path.join(PACKAGE, "config", "ekf_slam_p3dx.yaml"),
+                                  "--print-config"], stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, universal_newlines=True)
+        self.assertEqual(printed.returncode, 0, printed.stdout)
+        values = dict(line.split(": ", 1) for line in printed.stdout.splitlines() if ": " in line)
+        self.assertAlmostEqual(float(values["filter.motion_noise.rot_per_rot"]), 0.0203)
+        self.assertAlmostEqual(float(values["filter.motion_noise.trans_per_trans"]), 0.0267)
 
     def test_record_launch_records_what_offline_reads(self):
         prefix = os.path.join(self.tmp, "run")
@@ -142,9 +157,11 @@ class RobotConfiguration(unittest.TestCase):
         odom_pub = rospy.Publisher("/odom", Odometry, queue_size=10)
         tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=10)
         static_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        # Frames of its own: the test's latched /tf_static must not reach the
+        # other tests' tf listeners as base_link -> laser.
         mount = TransformStamped()
-        mount.header.frame_id = "base_link"
-        mount.child_frame_id = "laser"
+        mount.header.frame_id = "recorded_base_link"
+        mount.child_frame_id = "recorded_laser"
         mount.transform.translation.x = 0.16
         mount.transform.rotation = yaw_quaternion(0.0)
         static_pub.publish(TFMessage([mount]))
@@ -158,20 +175,20 @@ class RobotConfiguration(unittest.TestCase):
                 stamp = rospy.Time.now()
                 scan = LaserScan()
                 scan.header.stamp = stamp
-                scan.header.frame_id = "laser"
+                scan.header.frame_id = "recorded_laser"
                 scan.angle_min, scan.angle_max = -math.pi / 2, math.pi / 2
                 scan.angle_increment = math.pi / 180
                 scan.range_max = 80.0
                 scan.ranges = [2.0] * 181
                 odom = Odometry()
                 odom.header.stamp = stamp
-                odom.header.frame_id = "odom"
-                odom.child_frame_id = "base_link"
+                odom.header.frame_id = "recorded_odom"
+                odom.child_frame_id = "recorded_base_link"
                 odom.pose.pose.position.x = 0.01 * sent
                 odom.pose.pose.orientation = yaw_quaternion(0.0)
                 motion = TransformStamped()
                 motion.header = odom.header
-                motion.child_frame_id = "base_link"
+                motion.child_frame_id = "recorded_base_link"
                 motion.transform.translation.x = 0.01 * sent
                 motion.transform.rotation = yaw_quaternion(0.0)
                 scan_pub.publish(scan)
@@ -184,6 +201,8 @@ class RobotConfiguration(unittest.TestCase):
         finally:
             record.send_signal(signal.SIGINT)
             record.wait(timeout=30)
+            for publisher in (scan_pub, odom_pub, tf_pub, static_pub):
+                publisher.unregister()
         bags = glob.glob(prefix + "_*.bag")
         self.assertEqual(len(bags), 1, "bags: %s" % os.listdir(self.tmp))
         counts = {}

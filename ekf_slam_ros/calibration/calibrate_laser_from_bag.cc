@@ -1,6 +1,6 @@
 // calibrate_laser_from_bag: the laser mount (base_link → laser x, y, yaw)
 // from a recorded drive, with its uncertainty; optionally written as a
-// calibration file. docs/bringup.md, "Calibrating the laser mount".
+// calibration file. docs/bringup.md, "The laser mount".
 //
 //   calibrate_laser_from_bag --bag drive.bag [--calibration config/calibration.yaml]
 //                            [--write config/calibration.yaml]
