@@ -5,13 +5,21 @@ at a wall through cmd_vel_in, as teleop or the waypoint driver would.
 
 ~mode laser (the default gate): the robot stops before it touches the wall
   (no stall, clearance above the body's radius), the gate reports the stop
-  on /diagnostics, and backing away is allowed.
+  on /diagnostics, and backing away is allowed. The same again with the
+  two other drivers of the robot: teleop.py typed into a real
+  pseudo-terminal, and waypoint_driver given a goal beyond the wall.
 ~mode bumper (the gate's laser check off): the robot reaches the wall, the
   emulated P3-DX presses its front bumper, and the gate refuses further
   forward motion (cmd_vel forward speed 0 while cmd_vel_in still asks for
   it) and reports it.
 """
 import math
+import os
+import pty
+import select
+import signal
+import subprocess
+import tempfile
 import threading
 import time
 import unittest
@@ -25,7 +33,7 @@ from nav_msgs.msg import OccupancyGrid, Odometry
 from std_msgs.msg import Bool, UInt16
 
 from ekf_slam_tools.grids import clearance
-from ekf_slam_tools.se2 import inverse, compose, yaw_of
+from ekf_slam_tools.se2 import compose, inverse, yaw_of
 
 ROBOT_RADIUS = 0.26  # m, config/simulator.yaml: the disc that may not overlap a wall
 SPEED = 0.4          # m/s, commanded
@@ -87,6 +95,10 @@ class Recorder:
         return math.hypot(recent[-1][0] - recent[0][0], recent[-1][1] - recent[0][1])
 
 
+def select_readable(fd, timeout=0.1):
+    return bool(select.select([fd], [], [], timeout)[0])
+
+
 def wait_for(condition, timeout):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and not rospy.is_shutdown():
@@ -120,6 +132,66 @@ class SafetyStop(unittest.TestCase):
                     and self.recorder.moved_since(2.0) < 0.005):
                 return True
         return False
+
+    def assert_stopped_clear(self, what, timeout=40.0):
+        """The robot comes to rest short of the wall, untouched."""
+        r = self.recorder
+        began = time.monotonic()
+        time.sleep(3.0)
+        while time.monotonic() - began < timeout and r.moved_since(2.0) >= 0.005:
+            time.sleep(0.2)
+        end = r.pose()
+        gap = clearance(r.world, compose(self.from_world, end), 2.0)
+        rospy.loginfo("safety_stop (%s): stopped %.3f m from the wall", what, gap)
+        self.assertLess(r.moved_since(2.0), 0.005, what + ": the robot never came to rest")
+        self.assertFalse(r.stalled, what + ": the robot touched the wall (stall)")
+        self.assertGreater(gap, ROBOT_RADIUS + 0.02, what + ": stopped touching the wall")
+
+    def back_away(self):
+        self.drive(-0.2, 2.5)
+        self.command.publish(Twist())
+        time.sleep(1.0)
+
+    def teleop_at_the_wall(self):
+        pid, fd = pty.fork()
+        if pid == 0:
+            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_safety"])
+        try:
+            deadline = time.monotonic() + 30.0
+            text = b""
+            while b"space" not in text and time.monotonic() < deadline:
+                if select_readable(fd):
+                    text += os.read(fd, 1024)
+            time.sleep(1.0)
+            for _ in range(6):  # 0.3 m/s straight at the wall
+                os.write(fd, b"w")
+            self.assert_stopped_clear("teleop")
+            os.write(fd, b"q")
+            os.waitpid(pid, 0)
+        finally:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+    def waypoints_through_the_wall(self):
+        r = self.recorder
+        odom = rospy.wait_for_message("odom", Odometry, timeout=10.0)
+        p = odom.pose.pose
+        x, y, yaw = p.position.x, p.position.y, yaw_of(p.orientation)
+        path = os.path.join(tempfile.mkdtemp(prefix="safety_waypoints_"), "through_the_wall.yaml")
+        with open(path, "w") as stream:
+            stream.write("closed: false\nwaypoints:\n  - [%.3f, %.3f]\n" %
+                         (x + 4.0 * math.cos(yaw), y + 4.0 * math.sin(yaw)))
+        driver = subprocess.Popen(["rosrun", "ekf_slam", "waypoint_driver",
+                                   "__name:=waypoints_safety", "cmd_vel:=cmd_vel_in",
+                                   "_waypoints_file:=" + path, "_global_frame:=odom"])
+        try:
+            self.assert_stopped_clear("waypoint driver")
+        finally:
+            driver.send_signal(signal.SIGINT)
+            driver.wait(timeout=20)
+        self.assertFalse(r.front_bumper)
 
     def test_driven_at_a_wall(self):
         r = self.recorder
@@ -163,6 +235,11 @@ class SafetyStop(unittest.TestCase):
         self.assertGreater(math.hypot(after[0] - before[0], after[1] - before[1]), 0.15,
                            "the gate kept the robot from backing away")
         self.command.publish(Twist())
+        if self.mode == "laser":  # the other drivers of the robot, the same wall
+            time.sleep(1.0)
+            self.teleop_at_the_wall()
+            self.back_away()
+            self.waypoints_through_the_wall()
 
 
 if __name__ == "__main__":
