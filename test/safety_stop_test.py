@@ -6,8 +6,8 @@ at a wall through cmd_vel_in, as teleop or the waypoint driver would.
 ~mode laser (the default gate): the robot stops before it touches the wall
   (no stall, clearance above the body's radius), the gate reports the stop
   on /diagnostics, and backing away is allowed. The same again with the
-  two other drivers of the robot: teleop.py typed into a real
-  pseudo-terminal, and waypoint_driver given a goal beyond the wall.
+  other drivers of the robot: teleop.py typed into a real pseudo-terminal,
+  waypoint_driver given a goal beyond the wall, and teleop's step mode.
 ~mode bumper (the gate's laser check off): the robot reaches the wall, the
   emulated P3-DX presses its front bumper, and the gate refuses further
   forward motion (cmd_vel forward speed 0 while cmd_vel_in still asks for
@@ -174,6 +174,41 @@ class SafetyStop(unittest.TestCase):
             except ProcessLookupError:
                 pass
 
+    def steps_at_the_wall(self):
+        """Step mode (no SLAM here: its pause and step calls time out and
+        the steps go on): 0.25 m steps at the wall until the gate cuts them
+        short."""
+        pid, fd = pty.fork()
+        if pid == 0:
+            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_steps_safety",
+                                 "_step_mode:=true"])
+        text = b""
+
+        def read_for(seconds, marker=None):
+            nonlocal text
+            deadline = time.monotonic() + seconds
+            while time.monotonic() < deadline and (marker is None or marker not in text):
+                if select_readable(fd):
+                    try:
+                        text += os.read(fd, 1024)
+                    except OSError:
+                        return
+
+        try:
+            read_for(30.0, b"one step forward")
+            for n in range(1, 7):
+                os.write(fd, b"w")
+                read_for(30.0, b"step %d:" % n)
+            self.assertIn(b"step 6:", text, text.decode("utf-8", "replace"))
+            self.assert_stopped_clear("step mode")
+            os.write(fd, b"q")
+            os.waitpid(pid, 0)
+        finally:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
     def waypoints_through_the_wall(self):
         r = self.recorder
         odom = rospy.wait_for_message("odom", Odometry, timeout=10.0)
@@ -240,6 +275,8 @@ class SafetyStop(unittest.TestCase):
             self.teleop_at_the_wall()
             self.back_away()
             self.waypoints_through_the_wall()
+            self.back_away()
+            self.steps_at_the_wall()
 
 
 if __name__ == "__main__":
