@@ -6,17 +6,15 @@ the robot itself, and the calibration file it writes must hold the true
 mount: yaw within 0.3 degrees, x and y within 1 cm."""
 import math
 import os
-import pty
-import select
-import signal
 import tempfile
-import time
 import unittest
 
 import rospkg
 import rospy
 import rostest
 import yaml
+
+from ekf_slam_tools.terminal import TerminalProgram
 
 
 class CalibrateGuided(unittest.TestCase):
@@ -28,41 +26,20 @@ class CalibrateGuided(unittest.TestCase):
         nominal = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "calibration.yaml")
         rospy.wait_for_message("scan", rospy.AnyMsg, timeout=60.0)
         rospy.wait_for_message("odom", rospy.AnyMsg, timeout=30.0)
-        pid, fd = pty.fork()
-        if pid == 0:
-            os.execvp("rosrun", ["rosrun", "ekf_slam", "calibrate_laser_guided",
-                                 "_calibration:=" + nominal, "_write:=" + out])
-        text = ""
-
-        def read_until(marker, timeout):
-            nonlocal text
-            deadline = time.monotonic() + timeout
-            while marker not in text and time.monotonic() < deadline:
-                if select.select([fd], [], [], 0.2)[0]:
-                    try:
-                        data = os.read(fd, 4096)
-                    except OSError:
-                        break
-                    if not data:
-                        break
-                    text += data.decode("utf-8", "replace")
-            return marker in text
-
+        tool = TerminalProgram(["rosrun", "ekf_slam", "calibrate_laser_guided",
+                                "_calibration:=" + nominal, "_write:=" + out])
         try:
-            self.assertTrue(read_until("pitch: heights", 30.0), text)
-            os.write(fd, b"\n")  # no pitch measurement
-            self.assertTrue(read_until("roll: heights", 10.0), text)
-            os.write(fd, b"\n")
-            self.assertTrue(read_until("Enter to go on", 20.0), text)
-            os.write(fd, b"\n")
-            self.assertTrue(read_until("written to", 150.0), text)
-            _, status = os.waitpid(pid, 0)
-            self.assertEqual(os.WEXITSTATUS(status), 0, text)
+            self.assertTrue(tool.wait_for_text("pitch: heights", 30.0), tool.text())
+            tool.type("\n")  # no pitch measurement
+            self.assertTrue(tool.wait_for_text("roll: heights", 10.0), tool.text())
+            tool.type("\n")
+            self.assertTrue(tool.wait_for_text("Enter to go on", 20.0), tool.text())
+            tool.type("\n")
+            self.assertTrue(tool.wait_for_text("written to", 150.0), tool.text())
+            self.assertEqual(tool.wait(), 0, tool.text())
+            text = tool.text()
         finally:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            tool.kill()
         rospy.loginfo("calibrate_laser_guided said:\n%s", text)
         with open(out) as stream:
             result = yaml.safe_load(stream)

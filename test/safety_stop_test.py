@@ -15,8 +15,6 @@ at a wall through cmd_vel_in, as teleop or the waypoint driver would.
 """
 import math
 import os
-import pty
-import select
 import signal
 import subprocess
 import tempfile
@@ -34,6 +32,7 @@ from std_msgs.msg import Bool, UInt16
 
 from ekf_slam_tools.grids import clearance
 from ekf_slam_tools.se2 import compose, inverse, yaw_of
+from ekf_slam_tools.terminal import TerminalProgram, wait_for
 
 ROBOT_RADIUS = 0.26  # m, config/simulator.yaml: the disc that may not overlap a wall
 SPEED = 0.4          # m/s, commanded
@@ -95,19 +94,6 @@ class Recorder:
         return math.hypot(recent[-1][0] - recent[0][0], recent[-1][1] - recent[0][1])
 
 
-def select_readable(fd, timeout=0.1):
-    return bool(select.select([fd], [], [], timeout)[0])
-
-
-def wait_for(condition, timeout):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if condition():
-            return True
-        time.sleep(0.05)
-    return condition()
-
-
 class SafetyStop(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -153,61 +139,33 @@ class SafetyStop(unittest.TestCase):
         time.sleep(1.0)
 
     def teleop_at_the_wall(self):
-        pid, fd = pty.fork()
-        if pid == 0:
-            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_safety"])
+        teleop = TerminalProgram(["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_safety"])
         try:
-            deadline = time.monotonic() + 30.0
-            text = b""
-            while b"space" not in text and time.monotonic() < deadline:
-                if select_readable(fd):
-                    text += os.read(fd, 1024)
+            self.assertTrue(teleop.wait_for_text("space", 30.0), teleop.text())
             time.sleep(1.0)
-            for _ in range(6):  # 0.3 m/s straight at the wall
-                os.write(fd, b"w")
+            teleop.type("w" * 6)  # 0.3 m/s straight at the wall
             self.assert_stopped_clear("teleop")
-            os.write(fd, b"q")
-            os.waitpid(pid, 0)
+            teleop.type("q")
+            teleop.wait()
         finally:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            teleop.kill()
 
     def steps_at_the_wall(self):
         """Step mode (no SLAM here: its pause and step calls time out and
         the steps go on): 0.25 m steps at the wall until the gate cuts them
         short."""
-        pid, fd = pty.fork()
-        if pid == 0:
-            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_steps_safety",
-                                 "_step_mode:=true"])
-        text = b""
-
-        def read_for(seconds, marker=None):
-            nonlocal text
-            deadline = time.monotonic() + seconds
-            while time.monotonic() < deadline and (marker is None or marker not in text):
-                if select_readable(fd):
-                    try:
-                        text += os.read(fd, 1024)
-                    except OSError:
-                        return
-
+        teleop = TerminalProgram(["rosrun", "ekf_slam", "teleop.py",
+                                  "__name:=teleop_steps_safety", "_step_mode:=true"])
         try:
-            read_for(30.0, b"one step forward")
+            self.assertTrue(teleop.wait_for_text("one step forward", 30.0), teleop.text())
             for n in range(1, 7):
-                os.write(fd, b"w")
-                read_for(30.0, b"step %d:" % n)
-            self.assertIn(b"step 6:", text, text.decode("utf-8", "replace"))
+                teleop.type("w")
+                self.assertTrue(teleop.wait_for_text("step %d:" % n, 30.0), teleop.text())
             self.assert_stopped_clear("step mode")
-            os.write(fd, b"q")
-            os.waitpid(pid, 0)
+            teleop.type("q")
+            teleop.wait()
         finally:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            teleop.kill()
 
     def waypoints_through_the_wall(self):
         r = self.recorder

@@ -10,10 +10,6 @@
   bound) is kept: ~step afterwards puts the robot where it is.
 """
 import math
-import os
-import pty
-import select
-import signal
 import threading
 import time
 import unittest
@@ -27,6 +23,7 @@ from nav_msgs.msg import Odometry
 from std_srvs.srv import Trigger
 
 from ekf_slam_tools.se2 import compose, inverse, wrap, yaw_of
+from ekf_slam_tools.terminal import TerminalProgram, wait_for
 
 KEYS = "wawdwsawdw"  # ten steps: forward, turns both ways, one backward; heading kept
 
@@ -82,15 +79,6 @@ class Recorder:
             return [p for p in self.poses if p[0] >= t]
 
 
-def wait_for(condition, timeout):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if condition():
-            return True
-        time.sleep(0.05)
-    return condition()
-
-
 class StepMode(unittest.TestCase):
     def test_step_mode(self):
         rospy.init_node("step_mode_test")
@@ -99,44 +87,25 @@ class StepMode(unittest.TestCase):
         r = Recorder()
         self.assertTrue(wait_for(lambda: len(r.poses) > 5 and r.truth, 60.0), "SLAM not running")
 
-        pid, fd = pty.fork()
-        if pid == 0:
-            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_steps",
-                                 "_step_mode:=true", "_slam_namespace:=/ekf_slam"])
-        output = []
-
-        def read_output():
-            while True:
-                try:
-                    if select.select([fd], [], [], 0.1)[0]:
-                        data = os.read(fd, 1024)
-                        if not data:
-                            return
-                        output.append(data.decode("utf-8", "replace"))
-                except OSError:
-                    return
-
-        threading.Thread(target=read_output, daemon=True).start()
+        teleop = TerminalProgram(["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_steps",
+                                  "_step_mode:=true", "_slam_namespace:=/ekf_slam"])
         try:
-            self.assertTrue(wait_for(lambda: "step mode" in "".join(output), 30.0),
-                            "no step-mode help: %r" % "".join(output))
+            self.assertTrue(teleop.wait_for_text("step mode", 30.0),
+                            "no step-mode help: %r" % teleop.text())
             self.assertTrue(wait_for(lambda: r.slam.get("paused") == "True", 10.0),
                             "teleop did not pause SLAM")
             time.sleep(1.0)
             paused_at = time.monotonic()
             for n, key in enumerate(KEYS, start=1):
-                os.write(fd, key.encode())
                 rospy.loginfo("step_mode_test: key %s", key)
-                self.assertTrue(wait_for(lambda: "step %d:" % n in "".join(output), 20.0),
-                                "step %d (%s) not done: %r" % (n, key, "".join(output)[-300:]))
+                teleop.type(key)
+                self.assertTrue(teleop.wait_for_text("step %d:" % n, 20.0),
+                                "step %d (%s) not done: %r" % (n, key, teleop.text()[-300:]))
             time.sleep(1.0)
-            os.write(fd, b"q")
-            os.waitpid(pid, 0)
+            teleop.type("q")
+            teleop.wait()
         finally:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            teleop.kill()
         steps = r.poses_since(paused_at)
         rospy.loginfo("step mode: %d SLAM poses over %d steps", len(steps), len(KEYS))
         self.assertEqual(len(steps), len(KEYS), "one iteration per step, none in between")

@@ -1,8 +1,6 @@
 #!/usr/bin/python3
 """teleop.py through a real pseudo-terminal and a joystick device (test/teleop.test)."""
 import os
-import pty
-import select
 import shutil
 import signal
 import struct
@@ -16,6 +14,8 @@ import rospy
 import rostest
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import Joy
+
+from ekf_slam_tools.terminal import TerminalProgram, wait_for
 
 JS_EVENT = struct.Struct("<IhBB")
 
@@ -39,14 +39,6 @@ class Commands:
             return [r for r in self.received if r[0] >= t]
 
 
-def wait_for(condition, timeout=10.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.02)
-    return condition()
-
 
 def close(a, b):
     return a is not None and abs(a[0] - b[0]) < 1e-6 and abs(a[1] - b[1]) < 1e-6
@@ -64,44 +56,25 @@ class TeleopTest(unittest.TestCase):
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
     def test_keyboard_in_a_terminal(self):
-        pid, fd = pty.fork()
-        if pid == 0:  # the child: teleop with the pty as its terminal
-            os.execvp("rosrun", ["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_keys",
-                                 "_max_linear:=0.3", "_linear_step:=0.05", "_angular_step:=0.1"])
-        output = []
-
-        def read_output():
-            while True:
-                try:
-                    ready = select.select([fd], [], [], 0.1)[0]
-                    if ready:
-                        data = os.read(fd, 1024)
-                        if not data:
-                            return
-                        output.append(data.decode("utf-8", "replace"))
-                except OSError:
-                    return
-
-        reader = threading.Thread(target=read_output, daemon=True)
-        reader.start()
+        teleop = TerminalProgram(["rosrun", "ekf_slam", "teleop.py", "__name:=teleop_keys",
+                                  "_max_linear:=0.3", "_linear_step:=0.05",
+                                  "_angular_step:=0.1"])
         try:
-            self.assertTrue(wait_for(lambda: "space             stop" in "".join(output), 30.0),
-                            "no help on screen: %r" % "".join(output))
+            self.assertTrue(teleop.wait_for_text("space             stop", 30.0),
+                            "no help on screen: %r" % teleop.text())
             time.sleep(1.0)  # the subscriber connects
-            for _ in range(3):
-                os.write(fd, b"w")
+            teleop.type("www")
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.15, 0.0))),
                             "after w w w: %s" % (self.commands.last(),))
-            os.write(fd, b"\x1b[D")  # left arrow
+            teleop.type("\x1b[D")  # left arrow
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.15, 0.1))),
                             "after the left arrow: %s" % (self.commands.last(),))
-            for _ in range(10):  # beyond max_linear: clamped
-                os.write(fd, b"w")
+            teleop.type("w" * 10)  # beyond max_linear: clamped
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.3, 0.1))),
                             "clamped: %s" % (self.commands.last(),))
-            self.assertTrue(wait_for(lambda: "v +0.30 m/s, w +0.10 rad/s" in "".join(output)),
-                            "status line: %r" % "".join(output)[-200:])
-            os.write(fd, b" ")
+            self.assertTrue(teleop.wait_for_text("v +0.30 m/s, w +0.10 rad/s", 10.0),
+                            "status line: %r" % teleop.text()[-200:])
+            teleop.type(" ")
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.0, 0.0))))
             time.sleep(1.0)  # zeros for half a second, then silence
             quiet_since = time.monotonic()
@@ -110,23 +83,18 @@ class TeleopTest(unittest.TestCase):
             # A Joy message with the dead man held drives too.
             joy = rospy.Publisher("joy", Joy, queue_size=1)
             self.assertTrue(wait_for(lambda: joy.get_num_connections() > 0))
-            message = Joy(axes=[0.0, 0.5], buttons=[0, 0, 0, 0, 1])
             started = time.monotonic()
-            joy.publish(message)
+            joy.publish(Joy(axes=[0.0, 0.5], buttons=[0, 0, 0, 0, 1]))
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.15, 0.0))),
                             "after Joy: %s" % (self.commands.last(),))
             # The joystick falls silent: stop within joy_timeout.
             self.assertTrue(wait_for(lambda: close(self.commands.last(), (0.0, 0.0)), 3.0))
             self.assertLess(time.monotonic() - started, 2.0)
-            os.write(fd, b"q")
-            self.assertTrue(wait_for(lambda: "teleop: stopped" in "".join(output), 10.0))
-            _, status = os.waitpid(pid, 0)
-            self.assertEqual(os.WEXITSTATUS(status), 0)
+            teleop.type("q")
+            self.assertTrue(teleop.wait_for_text("teleop: stopped", 10.0))
+            self.assertEqual(teleop.wait(), 0)
         finally:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            teleop.kill()
 
     def test_joystick_device(self):
         fifo = os.path.join(self.tmp, "js0")
