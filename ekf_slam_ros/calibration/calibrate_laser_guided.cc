@@ -173,7 +173,7 @@ void tiltCalculator(const char* name) {
   }
 }
 
-// The corner straight ahead at about `range` (laser frame), or near `near`.
+// The reference corner, averaged over n_scans scans, near `near` (laser frame).
 ekf_slam::FeatureSighting sight(Robot* robot, const GuidedParams& p, const Vector2& near,
                                 double gate, const char* when) {
   std::printf("  averaging %d scans %s ...\n", p.n_scans, when);

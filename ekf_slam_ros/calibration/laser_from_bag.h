@@ -18,11 +18,11 @@ struct BagCalibration {
   int refused_matches = 0;  // scan pairs the matcher could not align
 };
 
-// Reads `bag_path` (topics and frames of `input`) and estimates the mount.
-// `nominal` seeds the matches; pass the calibration in use, or the bag's
-// own base_link → laser (`use_bag_mount`). Returns "" when the bag could be
-// read (the estimate may still be refused: see out->result.ok and
-// .message), else what is wrong with the input.
+// Reads `bag_path` (the default topics and frames of InputOptions) and
+// estimates the mount. `nominal` (the calibration in use) seeds the matches
+// and gives the frames; null: the bag's own base_link → laser. Returns ""
+// when the bag could be read (the estimate may still be refused: see
+// out->result.ok and .message), else what is wrong with the input.
 std::string calibrateFromBag(const std::string& bag_path, const LaserMount* nominal,
                              const ExtrinsicsOptions& options, BagCalibration* out);
 
