@@ -85,8 +85,8 @@ class OfficeLoop(unittest.TestCase):
         print("full smoother / RTS / filter against the truth: %.4f / %.4f / %.4f m mean "
               "position error" % (replay["smoothed_error"], replay["rts_error"],
                                   replay["filtered_error"]))
-        self.assertLessEqual(replay["smoothed_error"],
-                             replay["filtered_error"] + sim_replay.SMOOTHED_TOLERANCE)
+        self.assertLessEqual(replay["smoothed_error"], replay["filtered_error"] +
+                             sim_replay.smoothed_tolerance(replay["filtered_error"]))
 
 
 if __name__ == "__main__":
