@@ -122,6 +122,7 @@ class Teleop:
             self.odometry_history = []  # (monotonic, (x, y, yaw)) over the last moments
             self.move = None      # the step under way
             self.steps = 0
+            self.slam_missing = False  # SLAM's services did not answer
             self.slam_poses = 0   # SLAM poses received: one per iteration
             rospy.Subscriber("odom", Odometry, self.on_odometry, queue_size=5)
             rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_slam_pose, queue_size=5)
@@ -206,13 +207,19 @@ class Teleop:
             self.slam_poses += 1
 
     def call_slam(self, name):
+        """Calls SLAM's Trigger service `name`; None when SLAM does not
+        answer. Once it has not, later calls wait 0.2 s instead of 5 s: the
+        steps go on without SLAM (driving only) and say so."""
         service = self.slam_namespace.rstrip("/") + "/" + name
         try:
-            rospy.wait_for_service(service, timeout=5.0)
+            rospy.wait_for_service(service, timeout=0.2 if self.slam_missing else 5.0)
             answer = rospy.ServiceProxy(service, Trigger)()
+            self.slam_missing = False
             return answer.message
         except (rospy.ROSException, rospy.ServiceException) as error:
-            rospy.logwarn("teleop: %s failed: %s", service, error)
+            if not self.slam_missing:
+                rospy.logwarn("teleop: %s failed (%s): stepping without SLAM", service, error)
+            self.slam_missing = True
             return None
 
     def step_key(self, name):
