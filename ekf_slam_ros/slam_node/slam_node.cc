@@ -70,18 +70,38 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   diagnostics_.add("EKF-SLAM", this, &SlamNode::diagnose);
   last_diagnostic_time_ = ros::WallTime::now();
 
+  // The transform wait: odom → laser at the input's stamp covers both
+  // odom → base_link and base_link → laser. The filters' verdicts arrive
+  // through node_'s callback queue, on the thread that runs the callbacks.
+  const uint32_t queue_size = static_cast<uint32_t>(params_.scan_queue_size);
   if (params_.input == "features") {
+    features_filter_ = std::make_unique<tf2_ros::MessageFilter<Features>>(
+        tf_buffer_, params_.odom_frame, queue_size, node_);
+    features_filter_->registerCallback(
+        [this](const Features::ConstPtr& m) { onTransformsReady(m.get()); });
+    features_filter_->registerFailureCallback(
+        [this](const Features::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
+          onTransformsFailed(m.get(), reason);
+        });
     input_subscriber_ = node_.subscribe(params_.features_topic, 50, &SlamNode::onFeatures, this);
   } else {
+    scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
+        tf_buffer_, params_.odom_frame, queue_size, node_);
+    scan_filter_->registerCallback(
+        [this](const sensor_msgs::LaserScan::ConstPtr& m) { onTransformsReady(m.get()); });
+    scan_filter_->registerFailureCallback(
+        [this](const sensor_msgs::LaserScan::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
+          onTransformsFailed(m.get(), reason);
+        });
     input_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
   }
   initial_pose_subscriber_ = node_.subscribe("initialpose", 2, &SlamNode::onInitialPose, this);
   tf_timer_ =
       node_.createTimer(ros::Duration(1.0 / params_.tf_publish_rate), &SlamNode::onTfTimer, this);
-  // Scans waiting for a late transform are re-tried even when no new scan
-  // arrives (e.g. the laser stops).
+  // Inputs waiting for a missing transform are given up after tf_timeout
+  // even when no new scan arrives (e.g. the laser stops).
   drain_timer_ = node_.createTimer(ros::Duration(std::max(0.01, params_.tf_timeout / 4.0)),
-                                   [this](const ros::TimerEvent&) { drainQueue(); });
+                                   [this](const ros::TimerEvent&) { expireWaiting(); });
   diagnostic_timer_ = node_.createTimer(ros::Duration(0.1),
                                         [this](const ros::TimerEvent&) { diagnostics_.update(); });
 }
@@ -168,7 +188,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
     step_pending_ = false;
     paused_ = true;
     ++steps_done_;
-    queue_.clear();
+    clearWaiting();
     ROS_INFO("ekf_slam_node: step %ld: scan at %.3f %s; paused", steps_done_,
              pending.header.stamp.toSec(), toString(result.outcome));
   }
@@ -249,8 +269,9 @@ void SlamNode::resetState() {
   optimisations_mapped_ = -1;
   keys_mapped_ = 0;
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
-  queue_.clear();
+  clearWaiting();
   last_accepted_stamp_.reset();
+  last_processed_stamp_.reset();
   step_pending_ = false;
   stored_scans_.clear();
   path_.poses.clear();

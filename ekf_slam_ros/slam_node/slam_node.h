@@ -5,11 +5,12 @@
 // Data flow per scan (all callbacks on one thread, ros::spin; tf arrives
 // through GuardedTfListener's thread, which refuses future stamps):
 //   scan → checks (stamp after the last one, enough valid readings, geometry)
-//        → queue until tf odom→base_link and base_link→laser exist at the
-//          scan's stamp: a transform never received, or base_link→laser
-//          late, is waited for at most tf_timeout (then dropped and
-//          logged); odometry that has paused (logs record only motion) is
-//          waited for until its next sample, at most scan_queue_size scans
+//        → tf2_ros::MessageFilter until odom → laser (odom→base_link and
+//          base_link→laser) exists at the scan's stamp, at most
+//          scan_queue_size scans: a transform never received, or
+//          base_link→laser late, is waited for at most tf_timeout (then
+//          dropped and logged); odometry that has paused (logs record only
+//          motion) is waited for until its next sample
 //        → SlamPipeline::processScan(scan, odometry)
 //        → tf map→odom, pose, path, landmarks, landmark_map, association.
 // With input: features the node takes ekf_slam/Features (feature_node's
@@ -37,10 +38,12 @@
 #include <sensor_msgs/LaserScan.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <chrono>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -86,13 +89,15 @@ class SlamNode {
            const SlamConfig& config);
 
  private:
-  // One input waiting for its transforms: a scan, or features extracted
-  // from one (input: features), with the scan's header.
+  // One input waiting in the message filter for its transforms: a scan, or
+  // features extracted from one (input: features), with the scan's header.
   struct PendingInput {
     std_msgs::Header header;
     std::optional<Scan> scan;
     std::optional<FeatureSet> features;
-    ros::Time received;  // for the tf wait (clock time: data or sim)
+    ros::Time received;             // for the tf wait (clock time: data or sim)
+    const void* message = nullptr;  // the message the filter holds (identity only)
+    bool expired = false;           // dropped and counted after tf_timeout; ignored on release
   };
 
   // --- input (slam_node_input.cc): checks, the queue waiting for tf, drops.
@@ -103,8 +108,18 @@ class SlamNode {
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);
   // Common to both inputs: the clock and pause checks (false: dropped).
   bool acceptingInput();
-  void enqueue(PendingInput pending);
-  void drainQueue();
+  // Hands a checked input to its message filter (`add`: the filter's add
+  // for the message), or drops it for its stamp.
+  void enqueue(PendingInput pending, const std::function<void()>& add);
+  // The message filter's verdicts, on the node's thread: the transforms
+  // exist at the input's stamp, or it was dropped (queue full, too old).
+  void onTransformsReady(const void* message);
+  void onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason);
+  // Drops (and counts, once) inputs that have waited longer than tf_timeout
+  // for a transform that is missing rather than merely behind.
+  void expireWaiting();
+  // Empties both message filters and the inputs waiting in them.
+  void clearWaiting();
   // The transform target → source at `stamp`; false with a description of
   // what is missing (frames, how late) in `why`. `behind` (optional) is set
   // when the transform exists but its newest sample is older than `stamp`:
@@ -185,8 +200,15 @@ class SlamNode {
   bool paused_ = false;
   bool step_pending_ = false;  // ~step: pause again after the next scan
   long steps_done_ = 0;
-  std::deque<PendingInput> queue_;
-  std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the queue
+  // Inputs wait for their transforms in a tf2_ros::MessageFilter (target
+  // odom_frame, so that both odom → base_link and base_link → laser must
+  // exist at the stamp); `waiting_` holds what the node knows of each, in
+  // arrival order.
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
+  std::unique_ptr<tf2_ros::MessageFilter<Features>> features_filter_;
+  std::deque<PendingInput> waiting_;
+  std::optional<ros::Time> last_accepted_stamp_;   // newest scan let into the filter
+  std::optional<ros::Time> last_processed_stamp_;  // newest scan the filter let through
   // One per pipeline record, for the ~smooth grid (input: scan). The ranges
   // arrive as float32 and are kept so (half the memory of the core's
   // doubles, and the same values when converted back).

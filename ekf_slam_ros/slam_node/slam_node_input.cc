@@ -1,11 +1,13 @@
 // ekf_slam_node's input side: the checks each scan or features message
-// passes, the queue in which it waits for its transforms, the tf lookups,
-// the drop counters, and rviz's initial pose.
+// passes, its wait for the transforms (a tf2_ros::MessageFilter, bounded by
+// tf_timeout for a missing transform), the tf lookups, the drop counters,
+// and rviz's initial pose.
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2/exceptions.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -88,7 +90,7 @@ bool SlamNode::acceptingInput() {
         "cleared; call ~reset to start a new map from the new data",
         (last_clock_ - now).toSec());
     tf_buffer_.clear();
-    queue_.clear();
+    clearWaiting();
   }
   last_clock_ = now;
   if (paused_) {
@@ -104,6 +106,7 @@ void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
   pending.header = message->header;
   pending.scan = ros_conversions::fromLaserScan(*message);
   pending.received = ros::Time::now();
+  pending.message = message.get();
   std::ostringstream detail;
   detail.setf(std::ios::fixed);
   detail.precision(3);
@@ -122,7 +125,7 @@ void SlamNode::onScan(const sensor_msgs::LaserScan::ConstPtr& message) {
     drop(DropReason::kTooFewValidReadings, detail.str());
     return;
   }
-  enqueue(std::move(pending));
+  enqueue(std::move(pending), [this, message] { scan_filter_->add(message); });
 }
 
 void SlamNode::onFeatures(const Features::ConstPtr& message) {
@@ -143,10 +146,11 @@ void SlamNode::onFeatures(const Features::ConstPtr& message) {
     return;
   }
   pending.features = std::move(features);
-  enqueue(std::move(pending));
+  pending.message = message.get();
+  enqueue(std::move(pending), [this, message] { features_filter_->add(message); });
 }
 
-void SlamNode::enqueue(PendingInput pending) {
+void SlamNode::enqueue(PendingInput pending, const std::function<void()>& add) {
   const ros::Time stamp = pending.header.stamp;
   // A stamp far ahead of the clock (a driver's clock jump, a corrupt
   // header) must never become the reference later scans are compared
@@ -173,25 +177,10 @@ void SlamNode::enqueue(PendingInput pending) {
     return;
   }
   last_accepted_stamp_ = stamp;
-  queue_.push_back(std::move(pending));
-  while (static_cast<int>(queue_.size()) > params_.scan_queue_size) {
-    const PendingInput& oldest = queue_.front();
-    Pose2 unused;
-    std::string why;
-    std::ostringstream overflow;
-    overflow.setf(std::ios::fixed);
-    overflow.precision(3);
-    overflow << "scan at " << oldest.header.stamp.toSec() << " still waiting for tf when "
-             << params_.scan_queue_size << " newer scans arrived (scan_queue_size)";
-    DropReason reason = DropReason::kQueueOverflow;
-    if (!lookup(params_.odom_frame, params_.base_frame, oldest.header.stamp, &unused, &why)) {
-      overflow << ": the odometry is silent, " << why;
-      reason = DropReason::kOdomTransformMissing;
-    }
-    queue_.pop_front();
-    drop(reason, overflow.str());
-  }
-  drainQueue();
+  // The filter drops its oldest input when scan_queue_size are waiting
+  // (onTransformsFailed says why it was late).
+  waiting_.push_back(std::move(pending));
+  add();
 }
 
 bool SlamNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
@@ -226,29 +215,98 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
   }
 }
 
-void SlamNode::drainQueue() {
-  while (!queue_.empty()) {
-    const PendingInput& pending = queue_.front();
+void SlamNode::onTransformsReady(const void* message) {
+  const auto entry =
+      std::find_if(waiting_.begin(), waiting_.end(),
+                   [message](const PendingInput& p) { return p.message == message; });
+  if (entry == waiting_.end()) return;  // cleared (reset, pause) after the filter let it through
+  const PendingInput pending = std::move(*entry);
+  waiting_.erase(entry);
+  if (pending.expired) return;  // already dropped and counted
+  const ros::Time stamp = pending.header.stamp;
+  std::ostringstream detail;
+  detail.setf(std::ios::fixed);
+  detail.precision(3);
+  if (last_processed_stamp_ && !(stamp > *last_processed_stamp_)) {
+    // A newer input found its transforms first.
+    detail << "scan stamp " << stamp.toSec() << " is not after the last processed scan's "
+           << last_processed_stamp_->toSec() << "; the map is not touched";
+    drop(DropReason::kStampNotIncreasing, detail.str());
+    return;
+  }
+  Pose2 odometry, laser;
+  std::string why;
+  if (!lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &why)) {
+    detail << "scan at " << stamp.toSec() << ": " << why << "; the map is not touched";
+    drop(DropReason::kOdomTransformMissing, detail.str());
+    return;
+  }
+  if (!lookup(params_.base_frame, pending.header.frame_id, stamp, &laser, &why)) {
+    detail << "scan at " << stamp.toSec() << ": " << why << "; the map is not touched";
+    drop(DropReason::kLaserTransformMissing, detail.str());
+    return;
+  }
+  last_processed_stamp_ = stamp;
+  process(pending, odometry, laser);
+}
+
+void SlamNode::onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason) {
+  const auto entry =
+      std::find_if(waiting_.begin(), waiting_.end(),
+                   [message](const PendingInput& p) { return p.message == message; });
+  if (entry == waiting_.end()) return;
+  const PendingInput pending = std::move(*entry);
+  waiting_.erase(entry);
+  if (pending.expired) return;
+  const ros::Time stamp = pending.header.stamp;
+  std::ostringstream detail;
+  detail.setf(std::ios::fixed);
+  detail.precision(3);
+  detail << "scan at " << stamp.toSec();
+  if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) {
+    detail << " has no frame_id; the map is not touched";
+    drop(DropReason::kBadScanGeometry, detail.str());
+    return;
+  }
+  if (reason == tf2_ros::filter_failure_reasons::OutTheBack) {
+    detail << " is older than the transforms still buffered";
+  } else {
+    detail << " still waiting for tf when " << params_.scan_queue_size
+           << " newer scans arrived (scan_queue_size)";
+  }
+  Pose2 unused;
+  std::string why;
+  DropReason drop_reason = DropReason::kQueueOverflow;
+  if (!lookup(params_.odom_frame, params_.base_frame, stamp, &unused, &why)) {
+    detail << ": the odometry is silent, " << why;
+    drop_reason = DropReason::kOdomTransformMissing;
+  } else if (!lookup(params_.base_frame, pending.header.frame_id, stamp, &unused, &why)) {
+    detail << ": " << why;
+    drop_reason = DropReason::kLaserTransformMissing;
+  }
+  detail << "; the map is not touched";
+  drop(drop_reason, detail.str());
+}
+
+void SlamNode::expireWaiting() {
+  for (PendingInput& pending : waiting_) {
+    if (pending.expired) continue;
+    const double waited = (ros::Time::now() - pending.received).toSec();
+    if (waited < params_.tf_timeout && waited >= 0.0) continue;
     const ros::Time stamp = pending.header.stamp;
-    const std::string& laser_frame = pending.header.frame_id;
     Pose2 odometry, laser;
     std::string odom_why, laser_why;
     bool odometry_behind = false;
     const bool have_odometry = lookup(params_.odom_frame, params_.base_frame, stamp, &odometry,
                                       &odom_why, &odometry_behind);
-    const bool have_laser = lookup(params_.base_frame, laser_frame, stamp, &laser, &laser_why);
-    if (have_odometry && have_laser) {
-      const PendingInput input = std::move(queue_.front());
-      queue_.pop_front();
-      process(input, odometry, laser);
-      continue;
-    }
+    const bool have_laser =
+        lookup(params_.base_frame, pending.header.frame_id, stamp, &laser, &laser_why);
+    // Both there: the filter's verdict is on its way.
+    if (have_odometry && have_laser) continue;
     // Odometry that is alive but paused (a log records only motion; a
     // driver that publishes on change) resumes with the next sample, which
     // the scan needs for its interpolated pose: wait, bounded by the queue.
-    if (!have_odometry && odometry_behind && have_laser) return;
-    const double waited = (ros::Time::now() - pending.received).toSec();
-    if (waited < params_.tf_timeout && waited >= 0.0) return;  // wait for tf; order is kept
+    if (!have_odometry && odometry_behind && have_laser) continue;
     std::ostringstream detail;
     detail.setf(std::ios::fixed);
     detail.precision(3);
@@ -259,9 +317,17 @@ void SlamNode::drainQueue() {
     detail << (have_odometry ? laser_why : odom_why);
     if (!have_odometry && !have_laser) detail << "; also " << laser_why;
     detail << "; the map is not touched";
-    queue_.pop_front();
+    // It stays in the filter (which cannot give up one message) until the
+    // filter lets it go; it is counted now and ignored then.
+    pending.expired = true;
     drop(reason, detail.str());
   }
+}
+
+void SlamNode::clearWaiting() {
+  if (scan_filter_) scan_filter_->clear();
+  if (features_filter_) features_filter_->clear();
+  waiting_.clear();
 }
 
 void SlamNode::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message) {

@@ -37,7 +37,7 @@ std::string gridPathFor(const std::string& landmark_path) {
 bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
   paused_ = true;
   step_pending_ = false;
-  queue_.clear();
+  clearWaiting();
   response.success = true;
   response.message = "paused: scans are dropped until resume";
   ROS_INFO("ekf_slam_node: %s", response.message.c_str());
