@@ -181,7 +181,10 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   const ScanResult result = pending.scan ? pipeline_->processScan(*pending.scan, odometry)
                                          : pipeline_->processFeatures(pending.header.stamp.toSec(),
                                                                       *pending.features, odometry);
-  if (pending.scan && pipeline_->scans().size() > records_before) {
+  // ~smooth draws its grid from the back end's key scans; without a back
+  // end (loop closure off) it needs every scan's ranges.
+  if (pending.scan && !config_.pipeline.loop_closure.enabled &&
+      pipeline_->scans().size() > records_before) {
     stored_scans_.emplace_back(*pending.scan);
   }
   if (step_pending_) {  // ~step: this was the one scan; pause until the next step

@@ -209,9 +209,11 @@ class SlamNode {
   std::deque<PendingInput> waiting_;
   std::optional<ros::Time> last_accepted_stamp_;   // newest scan let into the filter
   std::optional<ros::Time> last_processed_stamp_;  // newest scan the filter let through
-  // One per pipeline record, for the ~smooth grid (input: scan). The ranges
-  // arrive as float32 and are kept so (half the memory of the core's
-  // doubles, and the same values when converted back).
+  // One per pipeline record, for the ~smooth grid (input: scan) when loop
+  // closure is off; with it on, ~smooth casts the back end's key scans and
+  // nothing is kept here. The ranges arrive as float32 and are kept so
+  // (half the memory of the core's doubles, and the same values when
+  // converted back).
   struct StoredScan {
     std::vector<float> ranges;
     double angle_min = 0.0, angle_increment = 0.0, range_min = 0.0, range_max = 0.0, stamp = 0.0;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -30,6 +31,23 @@ std::string gridPathFor(const std::string& landmark_path) {
       landmark_path.compare(landmark_path.size() - suffix.size(), suffix.size(), suffix) == 0;
   return (yaml ? landmark_path.substr(0, landmark_path.size() - suffix.size()) : landmark_path) +
          "_grid.yaml";
+}
+
+// The key scans moved to the smoothed pose of their scan (matched by
+// stamp); a key scan with no smoothed pose is left out.
+std::vector<SlamPipeline::KeyScan> keysAtSmoothedPoses(std::vector<SlamPipeline::KeyScan> keys,
+                                                       const std::vector<StampedPose>& smoothed) {
+  std::vector<SlamPipeline::KeyScan> moved;
+  moved.reserve(keys.size());
+  for (SlamPipeline::KeyScan& key : keys) {
+    const auto at =
+        std::lower_bound(smoothed.begin(), smoothed.end(), key.stamp,
+                         [](const StampedPose& pose, double stamp) { return pose.stamp < stamp; });
+    if (at == smoothed.end() || at->stamp != key.stamp) continue;
+    key.pose = at->pose;
+    moved.push_back(std::move(key));
+  }
+  return moved;
 }
 
 }  // namespace
@@ -232,14 +250,21 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     }
   }
   smoothed_path_publisher_.publish(path);
-  if (stored_scans_.empty()) {
+  // With loop closure on, the grid is cast from the back end's key scans
+  // (the readings it keeps anyway) at their smoothed poses: the node keeps
+  // no ranges of its own, and its memory grows with the key scans only.
+  std::vector<SlamPipeline::KeyScan> keys;
+  if (stored_scans_.empty()) keys = keysAtSmoothedPoses(pipeline_->keyScans(true), smoothed);
+  if (stored_scans_.empty() && keys.empty()) {
     // input: features: the node never saw the ranges a grid is cast from.
     response.success = true;
     response.message = "smoothed " + std::to_string(smoothed.size()) +
-                       " scan poses; no occupancy grid (input is features: no scans stored)";
+                       " scan poses; no occupancy grid (no scans stored: input is features, "
+                       "or no key scan yet)";
     ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
     return true;
   }
+  if (!keys.empty()) grid = gridFromKeyScans(keys, *laser_pose_, config_.map);
 
   publishNodeGrid(toOccupancyGridMessage(grid, header));
 
