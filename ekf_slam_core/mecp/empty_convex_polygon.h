@@ -32,8 +32,7 @@
 // Triangle emptiness for a fixed v_i is one sweep over the later rays,
 // keeping the intermediate point seen furthest counter-clockwise from v_i.
 //
-// Cost: O(n² log n) per anchor, O(n³ log n) in all, O(n²) memory; n = 60
-// takes well under a millisecond's worth of arithmetic per anchor.
+// Cost: O(n² log n) per anchor, O(n³ log n) in all, O(n²) memory.
 //
 // Predicates are exact for inputs whose cross products are exact (integer
 // coordinates of moderate size); for general doubles, near-degenerate
