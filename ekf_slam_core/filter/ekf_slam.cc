@@ -423,6 +423,19 @@ bool EkfSlam::removeLandmark(int id) {
   return true;
 }
 
+int EkfSlam::removeLandmarks(const std::vector<int>& ids) {
+  std::vector<int> slots;
+  slots.reserve(ids.size());
+  for (int id : ids) {
+    const int slot = slotOf(id);
+    if (slot >= 0) slots.push_back(slot);
+  }
+  std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
+  removeSlots(slots);
+  return static_cast<int>(slots.size());
+}
+
 void EkfSlam::removeSlots(const std::vector<int>& slots) {
   if (slots.empty()) return;
   std::vector<char> drop(landmarkCount(), 0);

@@ -122,6 +122,9 @@ class EkfSlam {
   // options().tentative_max_age steps. Returns how many were removed.
   int pruneTentative();
   bool removeLandmark(int id);
+  // Removes every listed landmark in one pass over P (ids that do not exist
+  // are skipped). Returns how many were removed.
+  int removeLandmarks(const std::vector<int>& ids);
 
   // Two landmarks that are one: the joint covariance says their difference is
   // zero within the gate (squared Mahalanobis distance of x_a − x_b under

@@ -329,6 +329,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   counters_.matches += static_cast<long>(out->iteration.matches.size());
   counters_.pruned += out->iteration.pruned;
   counters_.pruned_rare += pruneRarelySeen();
+  counters_.marginalised += boundLandmarks();
   for (const ObservationAssociation& a : out->iteration.association.observations) {
     if (a.decision == AssociationDecision::kAmbiguous) ++counters_.ambiguous;
   }
@@ -350,6 +351,25 @@ int SlamPipeline::pruneRarelySeen() {
   }
   for (int id : ids) filter_.removeLandmark(id);
   return static_cast<int>(ids.size());
+}
+
+int SlamPipeline::boundLandmarks() {
+  const int excess = filter_.landmarkCount() - options_.max_landmarks;
+  if (options_.max_landmarks <= 0 || excess <= 0) return 0;
+  // Least recently matched first; of those, the oldest.
+  std::vector<const LandmarkInfo*> order;
+  order.reserve(filter_.landmarks().size());
+  for (const LandmarkInfo& info : filter_.landmarks()) order.push_back(&info);
+  std::partial_sort(order.begin(), order.begin() + excess, order.end(),
+                    [](const LandmarkInfo* a, const LandmarkInfo* b) {
+                      if (a->last_seen_step != b->last_seen_step)
+                        return a->last_seen_step < b->last_seen_step;
+                      return a->id < b->id;
+                    });
+  std::vector<int> ids;
+  ids.reserve(excess);
+  for (int i = 0; i < excess; ++i) ids.push_back(order[i]->id);
+  return filter_.removeLandmarks(ids);
 }
 
 std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {

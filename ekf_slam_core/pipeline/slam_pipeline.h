@@ -77,6 +77,14 @@ struct PipelineOptions {
   // times and never again, yet each costs O(n) per update forever.
   int prune_min_observations = 4;  // 0: keep every landmark that survived tentative pruning
   long prune_age_steps = 100;      // iterations a landmark has to gather its observations
+  // The filter's landmark set is bounded: beyond max_landmarks, those
+  // matched least recently are marginalised out of the filter (their rows
+  // and columns dropped: exact for a Gaussian). The loop-closing back end
+  // and the full smoother keep their sightings, so the map and the final
+  // trajectory still use them; the filter's cost per scan stops growing
+  // with the building (an iteration at 100 landmarks: about 0.1 ms). 0:
+  // no bound.
+  int max_landmarks = 100;
   // Control source. With scan_matching.enabled every scan is first aligned to
   // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
   // the place of the raw odometry pose everywhere below: the filter's control
@@ -105,6 +113,7 @@ struct PipelineOptions {
     v.number("min_landmark_range", min_landmark_range, Bounds::atLeast(0.0, "m"));
     v.integer("prune_min_observations", prune_min_observations, Bounds::closed(0, 1e6));
     v.integer("prune_age_steps", prune_age_steps, Bounds::closed(1, 1e8, "iterations"));
+    v.integer("max_landmarks", max_landmarks, Bounds::closed(0, 1e6));
   }
 
   static MotionNoiseOptions defaultScanMatchedMotionNoise();
@@ -157,6 +166,7 @@ struct PipelineCounters {
   long new_landmarks = 0;
   long pruned = 0;                        // tentative landmarks removed
   long pruned_rare = 0;                   // landmarks removed by prune_min_observations
+  long marginalised = 0;                  // landmarks dropped by the max_landmarks bound
   long scan_matches = 0;                  // scans aligned by the scan matcher
   long scan_match_refusals = 0;           // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
@@ -264,6 +274,7 @@ class SlamPipeline {
   Pose2 deadReckoned(const Pose2& odometry) const;
   Matrix3 deadReckonedCovariance(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
+  int boundLandmarks();   // max_landmarks; returns how many were marginalised
   void trackKeyScans();
   void reanchorFilter(const Pose2& causal, const Pose2& published);
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;

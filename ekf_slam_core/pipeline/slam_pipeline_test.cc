@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <limits>
+#include <map>
 #include <random>
 
 #include "ekf_slam_core/sim/drive.h"
@@ -154,6 +157,51 @@ TEST(SlamPipeline, RarelySeenLandmarksArePrunedOnceOldEnough) {
   }
   options.prune_age_steps = 0;
   EXPECT_NE(options.validate().find("prune_age_steps"), std::string::npos);
+}
+
+// The landmark bound: the filter never holds more than max_landmarks; the
+// ones marginalised are those matched least recently, and what stays is a
+// valid Gaussian (P symmetric, positive definite).
+TEST(SlamPipeline, TheLandmarkSetIsBoundedByMarginalisingTheLeastRecentlySeen) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(3);
+  PipelineOptions options = defaultOptions(laser);
+  options.prune_min_observations = 0;  // only the bound removes landmarks
+  SlamPipeline unbounded(options);
+  options.max_landmarks = 4;
+  EXPECT_EQ(options.validate(), "");
+  SlamPipeline bounded(options);
+  long most_recent_removed = -1;
+  for (int i = 0; i <= 40; ++i) {
+    const Pose2 truth(0.05 * i, 0.0, 0.02 * i);
+    const Scan scan = scanAt(world, compose(truth, laser), 0.1 * i, &rng);
+    unbounded.processScan(scan, truth);
+    std::map<int, long> seen_before;
+    for (const LandmarkInfo& info : bounded.filter().landmarks())
+      seen_before[info.id] = info.last_seen_step;
+    bounded.processScan(scan, truth);
+    ASSERT_LE(bounded.filter().landmarkCount(), options.max_landmarks) << "scan " << i;
+    // Every landmark that left was seen no later than every one that stayed
+    // and existed before this scan.
+    long oldest_kept = std::numeric_limits<long>::max();
+    for (const LandmarkInfo& info : bounded.filter().landmarks()) {
+      if (seen_before.count(info.id)) oldest_kept = std::min(oldest_kept, seen_before[info.id]);
+      seen_before.erase(info.id);
+    }
+    for (const auto& [id, last_seen] : seen_before) {
+      EXPECT_LE(last_seen, oldest_kept) << "landmark " << id << " at scan " << i;
+      most_recent_removed = std::max(most_recent_removed, last_seen);
+    }
+  }
+  EXPECT_GT(unbounded.filter().landmarkCount(), options.max_landmarks) << "the bound never bit";
+  EXPECT_GT(bounded.counters().marginalised, 0);
+  EXPECT_GE(most_recent_removed, 0);
+  const Eigen::MatrixXd P = bounded.filter().covariance();
+  EXPECT_LT((P - P.transpose()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P).eigenvalues().minCoeff(), 0.0);
+  options.max_landmarks = -1;
+  EXPECT_NE(options.validate().find("max_landmarks"), std::string::npos);
 }
 
 TEST(SlamPipeline, MotionGatingIteratesOnlyAfterEnoughMotion) {

@@ -439,7 +439,7 @@ int main(int argc, char** argv) {
          << ", new: " << c.new_landmarks << "\n"
          << "landmarks: " << pipeline.filter().landmarkCount() << " (" << c.new_landmarks
          << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
-         << " as seen rarely)"
+         << " as seen rarely, " << c.marginalised << " marginalised by max_landmarks)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
