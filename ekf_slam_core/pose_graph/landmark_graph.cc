@@ -100,7 +100,9 @@ double LandmarkGraph::cost(const std::vector<Pose2>& poses, const std::vector<Ve
 namespace {
 
 // Accumulates the normal equations Σ w Jᵀ Ω J, Σ w Jᵀ Ω e over blocks whose
-// unknowns start at the given offsets (−1: a fixed pose, no unknowns).
+// unknowns start at the given offsets (−1: a fixed pose, no unknowns). H is
+// kept as its lower triangle only: SimplicialLDLT (Lower) reads nothing
+// else, and half the entries halve the assembly.
 class NormalEquations {
  public:
   NormalEquations(int unknowns, size_t expected_entries) : b_(Eigen::VectorXd::Zero(unknowns)) {
@@ -138,9 +140,11 @@ class NormalEquations {
  private:
   template <typename Block>
   void addBlock(int row, int col, const Block& block) {
-    if (row < 0 || col < 0) return;
+    if (row < 0 || col < 0 || row + block.rows() - 1 < col) return;
     for (int i = 0; i < block.rows(); ++i) {
-      for (int j = 0; j < block.cols(); ++j) triplets_.emplace_back(row + i, col + j, block(i, j));
+      for (int j = 0; j < block.cols(); ++j) {
+        if (row + i >= col + j) triplets_.emplace_back(row + i, col + j, block(i, j));
+      }
     }
   }
 

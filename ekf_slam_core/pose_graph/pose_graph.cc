@@ -27,12 +27,16 @@ namespace {
 // Node 0 is fixed, so node i > 0 owns the unknowns 3 (i − 1) … 3 (i − 1) + 2.
 int unknownIndex(int node) { return 3 * (node - 1); }
 
+// Only the lower triangle of H is assembled: SimplicialLDLT (Lower) reads
+// nothing else, and half the entries halve the assembly.
 void addBlock(std::vector<Eigen::Triplet<double>>* triplets, int row_node, int col_node,
               const Matrix3& block) {
-  if (row_node == 0 || col_node == 0) return;
+  if (row_node == 0 || col_node == 0 || row_node < col_node) return;
   const int r = unknownIndex(row_node), c = unknownIndex(col_node);
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) triplets->emplace_back(r + i, c + j, block(i, j));
+    for (int j = 0; j < 3; ++j) {
+      if (r + i >= c + j) triplets->emplace_back(r + i, c + j, block(i, j));
+    }
   }
 }
 
