@@ -46,6 +46,18 @@ const char* toString(FilterStatus status) {
   return "unknown status";
 }
 
+const char* toString(LandmarkKind kind) {
+  switch (kind) {
+    case LandmarkKind::kPoint:
+      return "point";
+    case LandmarkKind::kLine:
+      return "line";
+    case LandmarkKind::kLineAngle:
+      return "line_angle";
+  }
+  return "unknown";
+}
+
 std::string FilterOptions::validate() const {
   if (!laser_pose.allFinite()) return "laser_pose must be finite";
   return checkFields(*this);
@@ -124,6 +136,7 @@ FilterStatus EkfSlam::predict(const OdometryControl& u, double dt, bool jump_che
 
 bool EkfSlam::predictObservation(int slot, Prediction* out) const {
   assert(slot >= 0 && slot < landmarkCount());
+  if (landmarks_[slot].kind != LandmarkKind::kPoint) return false;
   const int j = landmarkIndex(slot);
   if (!predictPointObservation(pose(), options_.laser_pose, landmarkPosition(slot), &out->z,
                                &out->H_robot, &out->H_landmark)) {
@@ -237,7 +250,10 @@ void EkfSlam::mirrorPoseRowsAndLandmarkBlocks() {
   P_(1, 2) = P_(2, 1);
   P_.block(0, kPoseDim, kPoseDim, n - kPoseDim) =
       P_.block(kPoseDim, 0, n - kPoseDim, kPoseDim).transpose();
-  for (int j = kPoseDim; j < n; j += kLandmarkDim) P_(j, j + 1) = P_(j + 1, j);
+  for (const LandmarkInfo& info : landmarks_) {
+    if (landmarkDim(info.kind) == 2)
+      P_(info.index, info.index + 1) = P_(info.index + 1, info.index);
+  }
 }
 
 void EkfSlam::fillLandmarkColumns(const std::vector<int>& slots) {
@@ -251,9 +267,10 @@ void EkfSlam::fillLandmarkColumns(const std::vector<int>& slots) {
   for (int c0 = kPoseDim; c0 < end; c0 += kTile) {
     for (int slot : slots) {
       const int j = landmarkIndex(slot);
+      const int dim = landmarkDim(landmarks_[slot].kind);
       const int count = std::min(c0 + kTile, j) - c0;
       if (count <= 0) continue;
-      P_.block(c0, j, count, kLandmarkDim) = P_.block(j, c0, kLandmarkDim, count).transpose();
+      P_.block(c0, j, count, dim) = P_.block(j, c0, dim, count).transpose();
     }
   }
 }
@@ -280,7 +297,7 @@ FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) 
   Matrix2 G_z;
   const Vector2 m = landmarkFromObservation(pose(), options_.laser_pose, observation.z, &G_r, &G_z);
   const int n = dim_;
-  reserve(n + kLandmarkDim);
+  reserve(n + kPointDim);
   // New rows: P_m,all = G_r P_r,all;  P_mm = G_r P_rr G_rᵀ + G_z R G_zᵀ.
   const Eigen::Matrix<double, 2, Eigen::Dynamic> cross = G_r * P_.block(0, 0, 3, n);
   x_.segment<2>(n) = m;
@@ -289,18 +306,26 @@ FilterStatus EkfSlam::augment(const PointObservation& observation, int* new_id) 
   const Matrix2 P_mm = G_r * P_.topLeftCorner<3, 3>() * G_r.transpose() +
                        G_z * observation.covariance * G_z.transpose();
   P_.block<2, 2>(n, n) = 0.5 * (P_mm + P_mm.transpose());
-  dim_ = n + kLandmarkDim;
+  const int id = appendLandmark(LandmarkKind::kPoint, next_id_, 1, m);
+  if (new_id) *new_id = id;
+  return FilterStatus::kOk;
+}
 
+int EkfSlam::appendLandmark(LandmarkKind kind, int id, int observations,
+                            const Vector2& first_estimate) {
   LandmarkInfo info;
-  info.id = next_id_++;
-  info.first_estimate = m;
-  info.observations = 1;
+  info.id = id;
+  info.kind = kind;
+  info.index = dim_;
+  info.first_estimate = first_estimate;
+  info.observations = std::max(1, observations);
   info.created_step = step_;
   info.last_seen_step = step_;
-  slot_of_id_[info.id] = landmarkCount();
+  dim_ += landmarkDim(kind);
+  slot_of_id_[id] = landmarkCount();
   landmarks_.push_back(info);
-  if (new_id) *new_id = info.id;
-  return FilterStatus::kOk;
+  next_id_ = std::max(next_id_, id + 1);
+  return id;
 }
 
 FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2& covariance,
@@ -318,24 +343,14 @@ FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2
   }
   if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
   const int n = dim_;
-  reserve(n + kLandmarkDim);
+  reserve(n + kPointDim);
   // A prior map is known independently of where the robot is now: the new
   // rows and columns carry no correlation with the pose or other landmarks.
   x_.segment<2>(n) = position;
   P_.block(n, 0, 2, n).setZero();
   P_.block(0, n, n, 2).setZero();
   P_.block<2, 2>(n, n) = 0.5 * (covariance + covariance.transpose());
-  dim_ = n + kLandmarkDim;
-
-  LandmarkInfo info;
-  info.id = id;
-  info.first_estimate = position;
-  info.observations = std::max(1, observations);
-  info.created_step = step_;
-  info.last_seen_step = step_;
-  slot_of_id_[id] = landmarkCount();
-  landmarks_.push_back(info);
-  next_id_ = std::max(next_id_, id + 1);
+  appendLandmark(LandmarkKind::kPoint, id, observations, position);
   return FilterStatus::kOk;
 }
 
@@ -355,6 +370,9 @@ int EkfSlam::pruneTentative() {
 FilterStatus EkfSlam::mergeLandmarks(int keep_id, int drop_id, double gate, double bias_sigma) {
   const int a = slotOf(keep_id), b = slotOf(drop_id);
   if (a < 0 || b < 0 || a == b) return FilterStatus::kUnknownLandmark;
+  if (landmarks_[a].kind != LandmarkKind::kPoint || landmarks_[b].kind != LandmarkKind::kPoint) {
+    return FilterStatus::kBadObservation;
+  }
   const int n = dim_;
   const int ia = landmarkIndex(a), ib = landmarkIndex(b);
   fillLandmarkColumns({a, b});
@@ -395,9 +413,10 @@ std::vector<std::pair<int, int>> EkfSlam::mergeDuplicates(const std::vector<int>
       again = false;
       const int slot = slotOf(id);
       if (slot < 0) break;  // merged away already
+      if (landmarks_[slot].kind != LandmarkKind::kPoint) break;
       const Vector2 position = landmarkPosition(slot);
       for (int other = 0; other < landmarkCount(); ++other) {
-        if (other == slot) continue;
+        if (other == slot || landmarks_[other].kind != LandmarkKind::kPoint) continue;
         if ((landmarkPosition(other) - position).squaredNorm() > max_distance * max_distance) {
           continue;
         }
@@ -450,12 +469,13 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   for (int s = 0; s < landmarkCount(); ++s) {
     if (drop[s]) continue;
     const int from = landmarkIndex(s);
+    const int dim = landmarkDim(landmarks_[s].kind);
     if (runs.size() > 1 && runs.back().from + runs.back().length == from) {
-      runs.back().length += kLandmarkDim;
+      runs.back().length += dim;
     } else {
-      runs.push_back({from, n, kLandmarkDim});
+      runs.push_back({from, n, dim});
     }
-    n += kLandmarkDim;
+    n += dim;
   }
   // Move the kept entries down within the storage, column by column in
   // increasing order, each run of kept rows to its new place. No index grows,
@@ -486,7 +506,7 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
   }
   dim_ = n;
 
-  int kept = 0;
+  int kept = 0, index = kPoseDim;
   for (int s = 0; s < static_cast<int>(drop.size()); ++s) {
     if (drop[s]) {
       slot_of_id_.erase(landmarks_[s].id);
@@ -496,6 +516,8 @@ void EkfSlam::removeSlots(const std::vector<int>& slots) {
       landmarks_[kept] = landmarks_[s];
       slot_of_id_[landmarks_[kept].id] = kept;
     }
+    landmarks_[kept].index = index;
+    index += landmarkDim(landmarks_[kept].kind);
     ++kept;
   }
   landmarks_.resize(kept);
@@ -510,8 +532,9 @@ void EkfSlam::reanchor(const Pose2& robot_correction,
   for (int c = 0; c < n; ++c) {
     for (int r = c + 1; r < n; ++r) P_(c, r) = P_(r, c);
   }
-  // The rotation acting on each 2-row block (robot position, then each
-  // landmark); identity where nothing moves.
+  // The Jacobian acting on each 2-row block (robot position, then each
+  // point or line landmark); identity where nothing moves. A direction
+  // (kLineAngle) only shifts: its rows of P stay.
   std::vector<Matrix2> rotation(1 + landmarkCount(), Matrix2::Identity());
   std::vector<char> moved(1 + landmarkCount(), 0);
   const Pose2 robot = compose(robot_correction, pose());
@@ -525,14 +548,34 @@ void EkfSlam::reanchor(const Pose2& robot_correction,
     const int slot = slotOf(id);
     if (slot < 0) continue;
     const int i = landmarkIndex(slot);
-    x_.segment<2>(i) = transformFrom(correction, Vector2(x_.segment<2>(i)));
-    landmarks_[slot].first_estimate = transformFrom(correction, landmarks_[slot].first_estimate);
-    rotation[1 + slot] = correction.rotation();
-    moved[1 + slot] = 1;
+    switch (landmarks_[slot].kind) {
+      case LandmarkKind::kPoint:
+        x_.segment<2>(i) = transformFrom(correction, Vector2(x_.segment<2>(i)));
+        landmarks_[slot].first_estimate =
+            transformFrom(correction, landmarks_[slot].first_estimate);
+        rotation[1 + slot] = correction.rotation();
+        moved[1 + slot] = 1;
+        break;
+      case LandmarkKind::kLine: {
+        const double theta = x_(i + 1) + correction.theta;
+        const Vector2 normal(std::cos(theta), std::sin(theta));
+        const double p = x_(i) + normal.dot(correction.translation());
+        const double sign = p < 0.0 ? -1.0 : 1.0;
+        x_(i) = sign * p;
+        x_(i + 1) = wrapAngle(sign < 0.0 ? theta + kPi : theta);
+        rotation[1 + slot] << sign,
+            sign * Vector2(-normal.y(), normal.x()).dot(correction.translation()), 0.0, 1.0;
+        moved[1 + slot] = 1;
+        break;
+      }
+      case LandmarkKind::kLineAngle:
+        x_(i) = wrapAngle(x_(i) + correction.theta);
+        break;
+    }
   }
   // P ↦ J P Jᵀ, block by block: rows of block a by R_a, columns of block b by R_bᵀ.
   // The robot's heading row/column (index 2) is not rotated.
-  auto start = [](int block) { return block == 0 ? 0 : landmarkIndex(block - 1); };
+  auto start = [this](int block) { return block == 0 ? 0 : landmarkIndex(block - 1); };
   const int blocks = 1 + landmarkCount();
   for (int a = 0; a < blocks; ++a) {
     if (!moved[a]) continue;
@@ -552,6 +595,255 @@ void EkfSlam::reanchor(const Pose2& robot_correction,
       P_(c, r) = v;
     }
   }
+}
+
+PolarLine EkfSlam::lineLandmark(int slot) const {
+  const int i = landmarkIndex(slot);
+  PolarLine line;
+  if (landmarks_[slot].kind == LandmarkKind::kLine) {
+    line.p = x_(i);
+    line.theta = x_(i + 1);
+  } else {
+    line.theta = x_(i);  // a direction: no offset in the state
+  }
+  return line;
+}
+
+FilterStatus EkfSlam::augmentLine(const LineObservation& observation, LandmarkKind kind,
+                                  int* new_id) {
+  if (!mapping_enabled_) return FilterStatus::kMappingDisabled;
+  if (kind == LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+  if (!observation.z.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(observation.covariance)) return FilterStatus::kSingularInnovation;
+  const int n = dim_;
+  const Matrix3 P_rr = P_.topLeftCorner<3, 3>();
+  if (kind == LandmarkKind::kLine) {
+    PolarLine line;
+    Matrix23 G_r;
+    Matrix2 G_z, P_ll;
+    if (!lineLandmarkFromObservation(pose(), options_.laser_pose, observation.z, &line, &G_r,
+                                     &G_z) ||
+        !newLineLandmarkCovariance(P_rr, observation.covariance, G_r, G_z, &P_ll)) {
+      return FilterStatus::kBadObservation;
+    }
+    reserve(n + 2);
+    const Eigen::Matrix<double, 2, Eigen::Dynamic> cross = G_r * P_.block(0, 0, 3, n);
+    x_.segment<2>(n) = line.vector();
+    P_.block(n, 0, 2, n) = cross;
+    P_.block(0, n, n, 2) = cross.transpose();
+    P_.block<2, 2>(n, n) = P_ll;
+    const int id = appendLandmark(kind, next_id_, 1, line.vector());
+    if (new_id) *new_id = id;
+    return FilterStatus::kOk;
+  }
+  double theta_f = 0.0, variance = 0.0;
+  RowVector3 G_r;
+  RowVector2 G_z;
+  if (!lineAngleFromObservation(pose(), options_.laser_pose, observation.z, &theta_f, &G_r, &G_z) ||
+      !newLineAngleVariance(P_rr, observation.covariance, G_r, G_z, &variance)) {
+    return FilterStatus::kBadObservation;
+  }
+  reserve(n + 1);
+  const Eigen::RowVectorXd cross = G_r * P_.block(0, 0, 3, n);
+  x_(n) = theta_f;
+  P_.block(n, 0, 1, n) = cross;
+  P_.block(0, n, n, 1) = cross.transpose();
+  P_(n, n) = variance;
+  const int id = appendLandmark(kind, next_id_, 1, Vector2(0.0, theta_f));
+  if (new_id) *new_id = id;
+  return FilterStatus::kOk;
+}
+
+namespace {
+
+// One linearised line measurement: `rows` (1 or 2) rows of innovation,
+// noise and Jacobian blocks on the robot and on landmark slots.
+struct LinearisedLine {
+  int rows = 2;
+  Vector2 innovation = Vector2::Zero();
+  Matrix2 noise = Matrix2::Zero();
+  Matrix23 H_robot = Matrix23::Zero();
+  std::vector<std::pair<int, Matrix2>> blocks;  // (slot, rows × landmark dim, top-left)
+};
+
+}  // namespace
+
+FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observations,
+                                  const std::vector<LineMatch>& matches, std::vector<double>* nis) {
+  const int k = static_cast<int>(matches.size());
+  if (k == 0) {
+    if (nis) nis->clear();
+    return FilterStatus::kOk;
+  }
+  // Validate and linearise everything before touching the state.
+  std::vector<LinearisedLine> lines(k);
+  std::vector<char> line_used(landmarkCount(), 0);
+  std::vector<int> touched;
+  const Pose2 robot = pose();
+  const Pose2& laser = options_.laser_pose;
+  for (int i = 0; i < k; ++i) {
+    const LineMatch& match = matches[i];
+    if (match.observation < 0 || match.observation >= static_cast<int>(observations.size())) {
+      return FilterStatus::kBadObservation;
+    }
+    const LineObservation& obs = observations[match.observation];
+    if (!obs.z.allFinite()) return FilterStatus::kNonFiniteInput;
+    if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+    const int slot = slotOf(match.landmark_id);
+    if (slot < 0) return FilterStatus::kUnknownLandmark;
+    const LandmarkKind kind = landmarks_[slot].kind;
+    if (kind == LandmarkKind::kPoint || line_used[slot]) return FilterStatus::kBadObservation;
+    line_used[slot] = 1;
+    touched.push_back(slot);
+    LinearisedLine& line = lines[i];
+    line.noise = obs.covariance;
+    PolarLine predicted;
+    Matrix2 flip = Matrix2::Identity();  // innovation's sign convention for the p row
+    if (kind == LandmarkKind::kLine) {
+      Matrix2 H_line;
+      if (!predictLineObservation(robot, laser, lineLandmark(slot), &predicted, &line.H_robot,
+                                  &H_line)) {
+        return FilterStatus::kBadObservation;
+      }
+      line.blocks.emplace_back(slot, H_line);
+    } else {
+      int endpoints[2], count = 0;
+      for (int e : match.endpoint_ids) {
+        if (e < 0) continue;
+        const int s = slotOf(e);
+        if (s < 0) return FilterStatus::kUnknownLandmark;
+        if (landmarks_[s].kind != LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+        endpoints[count++] = s;
+      }
+      if (count == 2 && endpoints[0] == endpoints[1]) return FilterStatus::kBadObservation;
+      const double theta_f = lineAngle(slot);
+      if (count == 0) {  // θ alone, modulo π
+        double theta = 0.0, H_angle = 0.0;
+        RowVector3 H_r;
+        if (!predictLineAngle(robot, laser, theta_f, &theta, &H_r, &H_angle)) {
+          return FilterStatus::kBadObservation;
+        }
+        line.rows = 1;
+        line.innovation(0) = lineAngleDifference(obs.z.theta, theta);
+        line.noise = Matrix2::Zero();
+        line.noise(0, 0) = obs.covariance(1, 1);
+        line.H_robot.row(0) = H_r;
+        Matrix2 block = Matrix2::Zero();
+        block(0, 0) = H_angle;
+        line.blocks.emplace_back(slot, block);
+        continue;
+      }
+      Matrix2 H_m1, H_m2;
+      Vector2 H_angle;
+      const bool ok =
+          count == 1
+              ? predictLineFromAngleAndPoint(robot, laser, theta_f, landmarkPosition(endpoints[0]),
+                                             &predicted, &line.H_robot, &H_m1, &H_angle)
+              : predictLineFromAngleAndEndpoints(robot, laser, theta_f,
+                                                 landmarkPosition(endpoints[0]),
+                                                 landmarkPosition(endpoints[1]), &predicted,
+                                                 &line.H_robot, &H_m1, &H_m2, &H_angle);
+      if (!ok) return FilterStatus::kBadObservation;
+      Matrix2 angle_block = Matrix2::Zero();
+      angle_block.col(0) = H_angle;
+      line.blocks.emplace_back(slot, angle_block);
+      line.blocks.emplace_back(endpoints[0], H_m1);
+      touched.push_back(endpoints[0]);
+      if (count == 2) {
+        line.blocks.emplace_back(endpoints[1], H_m2);
+        touched.push_back(endpoints[1]);
+      }
+    }
+    // ν = z − ẑ with the p-sign and θ-wrap ambiguity resolved towards ẑ;
+    // ∂ν/∂ẑ = −flip, so the measurement Jacobian is flip · H.
+    Matrix2 J;
+    if (!lineInnovation(obs.z, predicted, &line.innovation, &J)) {
+      return FilterStatus::kBadObservation;
+    }
+    flip = -J;
+    line.H_robot = flip * line.H_robot;
+    for (auto& block : line.blocks) block.second = flip * block.second;
+  }
+
+  // The same whitened downdate as update(), with H assembled from blocks.
+  std::vector<int> offset(k + 1, 0);
+  for (int i = 0; i < k; ++i) offset[i + 1] = offset[i] + lines[i].rows;
+  const int m = offset[k];
+  const int n = dim_;
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  fillLandmarkColumns(touched);
+  auto P = P_.topLeftCorner(n, n);
+  Eigen::MatrixXd PHt(n, m);
+  Eigen::MatrixXd S(m, m);
+  Eigen::VectorXd innovation(m);
+  for (int i = 0; i < k; ++i) {
+    const LinearisedLine& line = lines[i];
+    const int r = line.rows;
+    PHt.middleCols(offset[i], r).noalias() = P.leftCols<3>() * line.H_robot.topRows(r).transpose();
+    for (const auto& [slot, H] : line.blocks) {
+      const int d = landmarkDim(landmarks_[slot].kind);
+      PHt.middleCols(offset[i], r).noalias() +=
+          P.middleCols(landmarkIndex(slot), d) * H.topLeftCorner(r, d).transpose();
+    }
+    innovation.segment(offset[i], r) = line.innovation.head(r);
+  }
+  for (int i = 0; i < k; ++i) {
+    const LinearisedLine& line = lines[i];
+    const int r = line.rows;
+    S.middleRows(offset[i], r).noalias() = line.H_robot.topRows(r) * PHt.topRows<3>();
+    for (const auto& [slot, H] : line.blocks) {
+      const int d = landmarkDim(landmarks_[slot].kind);
+      S.middleRows(offset[i], r).noalias() +=
+          H.topLeftCorner(r, d) * PHt.middleRows(landmarkIndex(slot), d);
+    }
+    S.block(offset[i], offset[i], r, r) += line.noise.topLeftCorner(r, r);
+  }
+  S = 0.5 * (S + S.transpose()).eval();
+  if (!isFiniteMatrix(S)) return FilterStatus::kNonFiniteInput;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
+    return FilterStatus::kSingularInnovation;
+  }
+  if (nis) {
+    nis->resize(k);
+    for (int i = 0; i < k; ++i) {
+      const int r = lines[i].rows;
+      const Eigen::VectorXd v = innovation.segment(offset[i], r);
+      (*nis)[i] = v.dot(S.block(offset[i], offset[i], r, r).ldlt().solve(v));
+    }
+  }
+  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // m × n
+  const Eigen::VectorXd whitened = llt.matrixL().solve(innovation);
+  x_.head(n).noalias() += Wt.transpose() * whitened;
+  x_(2) = wrapAngle(x_(2));
+  // Line landmarks back to their normal form (p >= 0, θ wrapped), which
+  // leaves the line unchanged; a p crossing zero negates that row of P.
+  for (int slot = 0; slot < landmarkCount(); ++slot) {
+    const int i = landmarkIndex(slot);
+    if (landmarks_[slot].kind == LandmarkKind::kLineAngle) x_(i) = wrapAngle(x_(i));
+    if (landmarks_[slot].kind != LandmarkKind::kLine) continue;
+    x_(i + 1) = wrapAngle(x_(i + 1));
+  }
+  P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
+  for (int slot = 0; slot < landmarkCount(); ++slot) {
+    const int i = landmarkIndex(slot);
+    if (landmarks_[slot].kind != LandmarkKind::kLine || x_(i) >= 0.0) continue;
+    x_(i) = -x_(i);
+    x_(i + 1) = wrapAngle(x_(i + 1) + kPi);
+    // Negate row and column i of the lower triangle (the diagonal keeps its sign).
+    P.block(i, 0, 1, i) *= -1.0;
+    P.block(i + 1, i, n - i - 1, 1) *= -1.0;
+  }
+  mirrorPoseRowsAndLandmarkBlocks();
+  for (int i = 0; i < k; ++i) {
+    for (const auto& [slot, H] : lines[i].blocks) {
+      if (landmarks_[slot].kind == LandmarkKind::kPoint) continue;  // endpoints: seen as points
+      ++landmarks_[slot].observations;
+      landmarks_[slot].last_seen_step = step_;
+    }
+  }
+  return FilterStatus::kOk;
 }
 
 double EkfSlam::poseNees(const Pose2& truth) const {

@@ -1,11 +1,14 @@
-// EKF-SLAM with point landmarks (thesis Ch. 2–4): the joint state of the
-// robot pose and the landmark positions in the map frame, its covariance,
-// and the four stages predict / (observe) / update / augment.
+// EKF-SLAM (thesis Ch. 2–4): the joint state of the robot pose and the
+// landmarks in the map frame, its covariance, and the four stages predict /
+// (observe) / update / augment. Landmarks are points (x, y), lines (p, θ) of
+// their normal form, or line directions θ alone (the thesis's θ-only lines,
+// §4.3.3, whose offset comes from endpoint point landmarks).
 //
 // State layout (use the helpers, never bare indices):
-//   x = [x_r (kPoseDim = 3: x, y, θ) | m_0 (2) | m_1 (2) | …]
-//   landmarkIndex(slot) = kPoseDim + kLandmarkDim · slot
-// Landmarks keep a stable id; their slot changes when others are removed.
+//   x = [x_r (kPoseDim = 3: x, y, θ) | landmark 0 | landmark 1 | …]
+//   each landmark landmarkDim(kind) long, from landmarkIndex(slot) on.
+// Landmarks keep a stable id; their slot and index change when others are
+// removed.
 //
 // Cost per operation with n = state size and k matched observations:
 //   predict O(n) (only the robot rows/columns change), augment O(n),
@@ -28,6 +31,7 @@
 #include <vector>
 
 #include "ekf_slam_core/filter/filter_status.h"
+#include "ekf_slam_core/models/line_observation_model.h"
 #include "ekf_slam_core/models/odometry_motion_model.h"
 #include "ekf_slam_core/models/point_observation_model.h"
 
@@ -67,12 +71,39 @@ struct PointObservation {
   Matrix2 covariance = Matrix2::Identity();  // of (range m, bearing rad): m², m·rad, rad²
 };
 
+// A line measured in the laser frame: its normal form (p, θ) and the
+// covariance of the fit.
+struct LineObservation {
+  PolarLine z;
+  Matrix2 covariance = Matrix2::Identity();  // of (p m, θ rad): m², m·rad, rad²
+};
+
+enum class LandmarkKind {
+  kPoint,      // (x, y)
+  kLine,       // (p, θ): x cos θ + y sin θ = p in the map frame, p >= 0
+  kLineAngle,  // θ alone: the direction of a line's normal in the map frame
+};
+constexpr int landmarkDim(LandmarkKind kind) { return kind == LandmarkKind::kLineAngle ? 1 : 2; }
+const char* toString(LandmarkKind kind);
+
+// A line observation matched to a line landmark. For a θ-only landmark
+// the offset comes from up to two point landmarks on the line (its
+// endpoints, thesis eqs. 4.35, 4.38): with none only θ is measured.
+struct LineMatch {
+  int observation = -1;            // index into the line observation vector
+  int landmark_id = -1;            // a kLine or kLineAngle landmark
+  int endpoint_ids[2] = {-1, -1};  // kLineAngle: point landmarks on the line (-1: none)
+};
+
 struct LandmarkInfo {
   int id = -1;
-  int observations = 0;                      // the creating observation plus every accepted match
-  long created_step = 0;                     // filter step at augmentation
-  long last_seen_step = 0;                   // filter step of the last match
-  Vector2 first_estimate = Vector2::Zero();  // position when created (first-estimates Jacobians)
+  LandmarkKind kind = LandmarkKind::kPoint;
+  int index = 0;            // of its first component in the state (changes when others go)
+  int observations = 0;     // the creating observation plus every accepted match
+  long created_step = 0;    // filter step at augmentation
+  long last_seen_step = 0;  // filter step of the last match
+  Vector2 first_estimate =
+      Vector2::Zero();  // point: position when created (first-estimates Jacobians)
 };
 
 struct PointMatch {
@@ -83,8 +114,9 @@ struct PointMatch {
 class EkfSlam {
  public:
   static constexpr int kPoseDim = 3;
-  static constexpr int kLandmarkDim = 2;
-  static constexpr int landmarkIndex(int slot) { return kPoseDim + kLandmarkDim * slot; }
+  static constexpr int kPointDim = 2;
+  int landmarkIndex(int slot) const { return landmarks_[slot].index; }
+  LandmarkKind landmarkKind(int slot) const { return landmarks_[slot].kind; }
 
   // Options must be valid (check options.validate() first); the initial
   // covariance must be symmetric PSD.
@@ -106,8 +138,8 @@ class EkfSlam {
     Matrix2 H_landmark;  // ∂z/∂m
     Matrix2 HPHt;        // H P Hᵀ: innovation covariance without the sensor noise
   };
-  // Predicted observation of the landmark in `slot`; false when undefined
-  // (landmark at the sensor origin).
+  // Predicted observation of the point landmark in `slot`; false when
+  // undefined (landmark at the sensor origin) or when it is not a point.
   bool predictObservation(int slot, Prediction* out) const;
 
   // Batch update with all matched observations of a scan. On success `nis`
@@ -118,6 +150,24 @@ class EkfSlam {
   // Adds a new landmark with full cross-covariances (§4.2.4).
   FilterStatus augment(const PointObservation& observation, int* new_id = nullptr);
 
+  // Batch update with matched line observations (after the points' update
+  // of the same scan: sequential batches are the joint update when the
+  // noises are independent). kLine: the (p, θ) innovation, the p-sign and
+  // θ-wrap ambiguity resolved towards the prediction; kLineAngle: θ alone
+  // (compared modulo π), or (p, θ) with one or two endpoint points. Every
+  // match is checked before the state is touched; `nis` as for update().
+  FilterStatus updateLines(const std::vector<LineObservation>& observations,
+                           const std::vector<LineMatch>& matches,
+                           std::vector<double>* nis = nullptr);
+  // Adds a line landmark: kLine (p, θ) with its 2 × 2 block, or kLineAngle
+  // θ_f = θ + s_θ alone (thesis eqs. 4.44–4.47), cross-covariances from the
+  // robot's rows.
+  FilterStatus augmentLine(const LineObservation& observation, LandmarkKind kind,
+                           int* new_id = nullptr);
+  // The line landmark in `slot` (kLine) or its direction (kLineAngle).
+  PolarLine lineLandmark(int slot) const;
+  double lineAngle(int slot) const { return x_(landmarkIndex(slot)); }
+
   // Removes landmarks seen only once whose age exceeds
   // options().tentative_max_age steps. Returns how many were removed.
   int pruneTentative();
@@ -126,7 +176,7 @@ class EkfSlam {
   // are skipped). Returns how many were removed.
   int removeLandmarks(const std::vector<int>& ids);
 
-  // Two landmarks that are one: the joint covariance says their difference is
+  // Two point landmarks that are one: the joint covariance says their difference is
   // zero within the gate (squared Mahalanobis distance of x_a − x_b under
   // P_aa + P_bb − P_ab − P_ba + b²I below `gate`, where b (m) is how far two
   // extractions of the same corner may disagree beyond their noise model:
@@ -193,10 +243,12 @@ class EkfSlam {
   // Moves pieces of the map rigidly, as a loop-closing back end moves the
   // key scans they hang off: the robot by `robot_correction`, each listed
   // landmark by its correction (landmarks not listed stay). A correction C
-  // acts in the map frame, x ↦ C ∘ x (a position m ↦ R_C m + t_C). The
+  // acts in the map frame, x ↦ C ∘ x (a position m ↦ R_C m + t_C, a line
+  // (p, θ) ↦ (p + n(θ + φ_C)·t_C, θ + φ_C), a direction θ ↦ θ + φ_C). The
   // covariance follows to first order: P ↦ J P Jᵀ with J block-diagonal,
-  // diag(R_C, 1) for the robot and R_C for each landmark (translations do
-  // not change it). First estimates (first_estimate_jacobians) move too.
+  // diag(R_C, 1) for the robot, R_C for a point, [1 n⊥(θ')·t_C; 0 1] for a
+  // line (its p row negated when p changes sign) and 1 for a direction.
+  // First estimates (first_estimate_jacobians) move too.
   // Landmark ids that do not exist are skipped.
   void reanchor(const Pose2& robot_correction,
                 const std::vector<std::pair<int, Pose2>>& landmark_corrections);
@@ -206,6 +258,9 @@ class EkfSlam {
   void mirrorPoseRowsAndLandmarkBlocks();
   void fillLandmarkColumns(const std::vector<int>& slots);
   void removeSlots(const std::vector<int>& slots);
+  // Appends a landmark of `kind` at the end of the state (its mean and the
+  // rows already written by the caller) and returns its id.
+  int appendLandmark(LandmarkKind kind, int id, int observations, const Vector2& first_estimate);
 
   FilterOptions options_;
   // Storage with spare capacity so that augmentation does not reallocate the

@@ -79,7 +79,7 @@ TEST(EkfSlam, BatchUpdateEqualsTheTextbookUpdate) {
     EkfSlam::Prediction p;
     ASSERT_TRUE(filter.predictObservation(i, &p));
     H.block<2, 3>(2 * i, 0) = p.H_robot;
-    H.block<2, 2>(2 * i, EkfSlam::landmarkIndex(i)) = p.H_landmark;
+    H.block<2, 2>(2 * i, filter.landmarkIndex(i)) = p.H_landmark;
     R.block<2, 2>(2 * i, 2 * i) = obs[i].covariance;
     nu(2 * i) = obs[i].z.range - p.z.range;
     nu(2 * i + 1) = wrapAngle(obs[i].z.bearing - p.z.bearing);
@@ -300,12 +300,12 @@ void expectBlocksOfTheCovariance(const EkfSlam& filter) {
   const MatrixXd P = filter.covariance();
   EXPECT_EQ(filter.poseCovariance(), Matrix3(P.topLeftCorner<3, 3>()));
   for (int a = 0; a < filter.landmarkCount(); ++a) {
-    const int ja = EkfSlam::landmarkIndex(a);
+    const int ja = filter.landmarkIndex(a);
     EXPECT_EQ(filter.landmarkCovariance(a), Matrix2(P.block<2, 2>(ja, ja))) << a;
     EXPECT_EQ(filter.poseLandmarkCovariance(a), (Eigen::Matrix<double, 3, 2>(P.block<3, 2>(0, ja))))
         << a;
     for (int b = 0; b < filter.landmarkCount(); ++b) {
-      const int jb = EkfSlam::landmarkIndex(b);
+      const int jb = filter.landmarkIndex(b);
       EXPECT_EQ(filter.landmarkCrossCovariance(a, b), Matrix2(P.block<2, 2>(ja, jb)))
           << a << ", " << b;
     }
@@ -330,7 +330,7 @@ void expectTextbookUpdate(EkfSlam& filter, const std::vector<int>& slots) {
     obs.push_back(observation(p.z.range + 0.01 * (i + 1), p.z.bearing - 0.004 * (i + 1)));
     matches.push_back({i, filter.landmarks()[slots[i]].id});
     H.block<2, 3>(2 * i, 0) = p.H_robot;
-    H.block<2, 2>(2 * i, EkfSlam::landmarkIndex(slots[i])) = p.H_landmark;
+    H.block<2, 2>(2 * i, filter.landmarkIndex(slots[i])) = p.H_landmark;
     R.block<2, 2>(2 * i, 2 * i) = obs.back().covariance;
     nu(2 * i) = obs.back().z.range - p.z.range;
     nu(2 * i + 1) = wrapAngle(obs.back().z.bearing - p.z.bearing);
@@ -371,8 +371,8 @@ TEST(EkfSlam, PruningFromTheMiddleKeepsExactlyTheOtherRowsAndColumns) {
   EXPECT_EQ(filter.pruneTentative(), 6);  // slots 0, 3, 4, 6, 7, 9
   std::vector<int> keep = {0, 1, 2};
   for (int slot : seen) {
-    keep.push_back(EkfSlam::landmarkIndex(slot));
-    keep.push_back(EkfSlam::landmarkIndex(slot) + 1);
+    keep.push_back(filter.landmarkIndex(slot));
+    keep.push_back(filter.landmarkIndex(slot) + 1);
   }
   ASSERT_EQ(filter.stateDim(), static_cast<int>(keep.size()));
   EXPECT_EQ(filter.state(), x(keep));
@@ -381,7 +381,7 @@ TEST(EkfSlam, PruningFromTheMiddleKeepsExactlyTheOtherRowsAndColumns) {
   for (int s = 0; s < 4; ++s) {
     EXPECT_EQ(filter.landmarks()[s].id, seen_ids[s]);
     EXPECT_EQ(filter.slotOf(seen_ids[s]), s);
-    const int j = EkfSlam::landmarkIndex(seen[s]);
+    const int j = filter.landmarkIndex(seen[s]);
     EXPECT_EQ(filter.landmarkCovariance(s), Matrix2(P.block<2, 2>(j, j)));
   }
   expectBlocksOfTheCovariance(filter);
@@ -407,8 +407,8 @@ TEST(EkfSlam, MergingTwinLandmarksIsTheConstrainedUpdate) {
   const VectorXd x = filter.state();
   const int n = filter.stateDim();
   MatrixXd H = MatrixXd::Zero(2, n);
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
+  H.block<2, 2>(0, filter.landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, filter.landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
   const MatrixXd K = P * H.transpose() * (H * P * H.transpose()).inverse();
   VectorXd x_expected = x - K * (H * x);
   MatrixXd P_expected = P - K * H * P;
@@ -440,8 +440,8 @@ TEST(EkfSlam, MergingATwinFromTheMiddleIsTheConstrainedUpdateWithoutIt) {
   const VectorXd x = filter.state();
   const int n = filter.stateDim();
   MatrixXd H = MatrixXd::Zero(2, n);
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(t)) = -Matrix2::Identity();
+  H.block<2, 2>(0, filter.landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, filter.landmarkIndex(t)) = -Matrix2::Identity();
   const MatrixXd K = P * H.transpose() * (H * P * H.transpose()).inverse();
   const VectorXd x_expected = x - K * (H * x);
   const MatrixXd P_expected = P - K * H * P;
@@ -450,7 +450,7 @@ TEST(EkfSlam, MergingATwinFromTheMiddleIsTheConstrainedUpdateWithoutIt) {
   ASSERT_EQ(filter.mergeLandmarks(filter.landmarks()[0].id, twin, 9.21), FilterStatus::kOk);
   std::vector<int> keep;
   for (int i = 0; i < n; ++i) {
-    if (i != EkfSlam::landmarkIndex(t) && i != EkfSlam::landmarkIndex(t) + 1) keep.push_back(i);
+    if (i != filter.landmarkIndex(t) && i != filter.landmarkIndex(t) + 1) keep.push_back(i);
   }
   ASSERT_EQ(filter.stateDim(), n - 2);
   EXPECT_EQ(filter.slotOf(twin), -1);
@@ -485,8 +485,8 @@ TEST(EkfSlam, MergingWithABiasAllowanceIsTheUpdateWithThatNoise) {
   const VectorXd x = filter.state();
   const int n = filter.stateDim();
   MatrixXd H = MatrixXd::Zero(2, n);
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(0)).setIdentity();
-  H.block<2, 2>(0, EkfSlam::landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
+  H.block<2, 2>(0, filter.landmarkIndex(0)).setIdentity();
+  H.block<2, 2>(0, filter.landmarkIndex(filter.slotOf(twin))) = -Matrix2::Identity();
   const double b = 0.03;
   const MatrixXd S = H * P * H.transpose() + b * b * MatrixXd::Identity(2, 2);
   const MatrixXd K = P * H.transpose() * S.inverse();

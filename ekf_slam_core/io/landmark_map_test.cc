@@ -224,7 +224,7 @@ TEST(SeedingTheFilter, LoadedLandmarksKeepIdsMeansCovariancesAndAreUncorrelated)
     EXPECT_EQ(filter.landmarkPosition(s), map.landmarks[s].position);
     EXPECT_TRUE(filter.landmarkCovariance(s).isApprox(map.landmarks[s].covariance, 1e-15));
     // No correlation with the pose or any other landmark.
-    const int row = EkfSlam::landmarkIndex(s);
+    const int row = filter.landmarkIndex(s);
     EXPECT_EQ(filter.covariance().block(row, 0, 2, row).norm(), 0.0);
   }
   EXPECT_TRUE(filter.poseCovariance().isApprox(Matrix3::Identity() * 0.01));
