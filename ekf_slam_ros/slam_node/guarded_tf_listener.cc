@@ -64,6 +64,7 @@ void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, 
     if (problem.empty()) {
       if (!is_static) last = std::max(last, transform.header.stamp);
       try {
+        const std::lock_guard<std::mutex> lock(insertion_mutex_);
         buffer_.setTransform(transform, authority, is_static);
       } catch (const tf2::TransformException& e) {
         ROS_WARN_THROTTLE(5.0, "ekf_slam_node: tf refused a transform: %s", e.what());

@@ -26,6 +26,7 @@
 #include <atomic>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -40,6 +41,17 @@ class GuardedTfListener {
   ~GuardedTfListener();
   GuardedTfListener(const GuardedTfListener&) = delete;
   GuardedTfListener& operator=(const GuardedTfListener&) = delete;
+
+  // Runs `f` while no transform enters the buffer. tf2_ros::MessageFilter::add
+  // registers its transformable requests before it files the message; a
+  // transform inserted in between (this listener's thread) answers the
+  // request for a message the filter does not know yet, and the message
+  // then waits until it is dropped. Adding under this lock closes that gap.
+  template <class F>
+  void withInsertionsPaused(F&& f) {
+    const std::lock_guard<std::mutex> lock(insertion_mutex_);
+    f();
+  }
 
   long refusedFuture() const { return refused_future_; }
   long refusedInvalid() const { return refused_invalid_; }
@@ -64,6 +76,7 @@ class GuardedTfListener {
   std::atomic<bool> running_{true};
   std::thread thread_;
   std::atomic<long> refused_future_{0}, refused_invalid_{0};
+  std::mutex insertion_mutex_;  // held while a transform enters the buffer
   // Newest accepted stamp per (parent, child); used on the listener's thread only.
   std::map<std::pair<std::string, std::string>, ros::Time> last_accepted_;
 };

@@ -274,7 +274,6 @@ void SlamNode::resetState() {
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
   clearWaiting();
   last_accepted_stamp_.reset();
-  last_processed_stamp_.reset();
   step_pending_ = false;
   stored_scans_.clear();
   path_.poses.clear();

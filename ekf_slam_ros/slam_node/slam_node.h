@@ -97,7 +97,8 @@ class SlamNode {
     std::optional<FeatureSet> features;
     ros::Time received;             // for the tf wait (clock time: data or sim)
     const void* message = nullptr;  // the message the filter holds (identity only)
-    bool expired = false;           // dropped and counted after tf_timeout; ignored on release
+    bool ready = false;             // its transforms exist; processed once the older ones are
+    bool expired = false;           // dropped and counted; ignored on release
   };
 
   // --- input (slam_node_input.cc): checks, the queue waiting for tf, drops.
@@ -114,6 +115,9 @@ class SlamNode {
   // The message filter's verdicts, on the node's thread: the transforms
   // exist at the input's stamp, or it was dropped (queue full, too old).
   void onTransformsReady(const void* message);
+  // Processes the ready inputs at the head of the queue, in arrival order.
+  void releaseInOrder();
+  void processReleased(const PendingInput& pending);
   void onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason);
   // Drops (and counts, once) inputs that have waited longer than tf_timeout
   // for a transform that is missing rather than merely behind.
@@ -207,8 +211,7 @@ class SlamNode {
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
   std::unique_ptr<tf2_ros::MessageFilter<Features>> features_filter_;
   std::deque<PendingInput> waiting_;
-  std::optional<ros::Time> last_accepted_stamp_;   // newest scan let into the filter
-  std::optional<ros::Time> last_processed_stamp_;  // newest scan the filter let through
+  std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the filter
   // One per pipeline record, for the ~smooth grid (input: scan) when loop
   // closure is off; with it on, ~smooth casts the back end's key scans and
   // nothing is kept here. The ranges arrive as float32 and are kept so

@@ -180,7 +180,7 @@ void SlamNode::enqueue(PendingInput pending, const std::function<void()>& add) {
   // The filter drops its oldest input when scan_queue_size are waiting
   // (onTransformsFailed says why it was late).
   waiting_.push_back(std::move(pending));
-  add();
+  tf_listener_.withInsertionsPaused(add);
 }
 
 bool SlamNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
@@ -220,20 +220,30 @@ void SlamNode::onTransformsReady(const void* message) {
       std::find_if(waiting_.begin(), waiting_.end(),
                    [message](const PendingInput& p) { return p.message == message; });
   if (entry == waiting_.end()) return;  // cleared (reset, pause) after the filter let it through
-  const PendingInput pending = std::move(*entry);
-  waiting_.erase(entry);
-  if (pending.expired) return;  // already dropped and counted
+  entry->ready = true;
+  releaseInOrder();
+}
+
+void SlamNode::releaseInOrder() {
+  // The filter answers each input on its own; the map takes them in the
+  // order they arrived, so a ready input waits for the older ones.
+  while (!waiting_.empty()) {
+    if (waiting_.front().expired) {
+      waiting_.pop_front();
+      continue;
+    }
+    if (!waiting_.front().ready) return;
+    const PendingInput pending = std::move(waiting_.front());
+    waiting_.pop_front();
+    processReleased(pending);
+  }
+}
+
+void SlamNode::processReleased(const PendingInput& pending) {
   const ros::Time stamp = pending.header.stamp;
   std::ostringstream detail;
   detail.setf(std::ios::fixed);
   detail.precision(3);
-  if (last_processed_stamp_ && !(stamp > *last_processed_stamp_)) {
-    // A newer input found its transforms first.
-    detail << "scan stamp " << stamp.toSec() << " is not after the last processed scan's "
-           << last_processed_stamp_->toSec() << "; the map is not touched";
-    drop(DropReason::kStampNotIncreasing, detail.str());
-    return;
-  }
   Pose2 odometry, laser;
   std::string why;
   if (!lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &why)) {
@@ -246,7 +256,6 @@ void SlamNode::onTransformsReady(const void* message) {
     drop(DropReason::kLaserTransformMissing, detail.str());
     return;
   }
-  last_processed_stamp_ = stamp;
   process(pending, odometry, laser);
 }
 
@@ -255,9 +264,13 @@ void SlamNode::onTransformsFailed(const void* message, tf2_ros::FilterFailureRea
       std::find_if(waiting_.begin(), waiting_.end(),
                    [message](const PendingInput& p) { return p.message == message; });
   if (entry == waiting_.end()) return;
-  const PendingInput pending = std::move(*entry);
-  waiting_.erase(entry);
-  if (pending.expired) return;
+  if (entry->expired) {  // already dropped and counted
+    waiting_.erase(entry);
+    releaseInOrder();
+    return;
+  }
+  entry->expired = true;  // dropped below; leaves the queue in order
+  const PendingInput& pending = *entry;
   const ros::Time stamp = pending.header.stamp;
   std::ostringstream detail;
   detail.setf(std::ios::fixed);
@@ -266,6 +279,7 @@ void SlamNode::onTransformsFailed(const void* message, tf2_ros::FilterFailureRea
   if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) {
     detail << " has no frame_id; the map is not touched";
     drop(DropReason::kBadScanGeometry, detail.str());
+    releaseInOrder();
     return;
   }
   if (reason == tf2_ros::filter_failure_reasons::OutTheBack) {
@@ -286,6 +300,7 @@ void SlamNode::onTransformsFailed(const void* message, tf2_ros::FilterFailureRea
   }
   detail << "; the map is not touched";
   drop(drop_reason, detail.str());
+  releaseInOrder();
 }
 
 void SlamNode::expireWaiting() {
@@ -301,8 +316,12 @@ void SlamNode::expireWaiting() {
                                       &odom_why, &odometry_behind);
     const bool have_laser =
         lookup(params_.base_frame, pending.header.frame_id, stamp, &laser, &laser_why);
-    // Both there: the filter's verdict is on its way.
-    if (have_odometry && have_laser) continue;
+    // Both there for tf_timeout and still no verdict from the filter: take
+    // it as ready (its later verdict finds nothing to act on).
+    if (have_odometry && have_laser) {
+      pending.ready = true;
+      continue;
+    }
     // Odometry that is alive but paused (a log records only motion; a
     // driver that publishes on change) resumes with the next sample, which
     // the scan needs for its interpolated pose: wait, bounded by the queue.
@@ -322,6 +341,7 @@ void SlamNode::expireWaiting() {
     pending.expired = true;
     drop(reason, detail.str());
   }
+  releaseInOrder();
 }
 
 void SlamNode::clearWaiting() {
