@@ -19,12 +19,14 @@
 // the last two optimisations (ekf_slam_core/pose_graph/graph_io.h gives the
 // formats), to be solved again by other solvers (docs/solvers.md):
 // pose_graph.txt, the loop-closure pose graph as the back end's final
-// optimisation started from (when a loop was closed), and
-// landmark_graph.txt, the full smoother's last optimisation likewise; each
-// with <name>_scans.txt, the scan anchors that turn a solution into one pose
-// per scan (trajectory_optimized.txt and trajectory_smoothed.txt from the
-// run's own solutions). Exit code 0 on success, 1 on bad arguments or
-// configuration, 2 on unreadable input, 3 when the output cannot be written.
+// optimisation started from (when a loop was closed), pose_graph_cold.txt,
+// the same graph started from the front end's key-scan poses, and
+// landmark_graph.txt, the full smoother's last optimisation as it started;
+// with pose_graph_scans.txt and landmark_graph_scans.txt, the scan anchors
+// that turn a solution into one pose per scan (as trajectory_optimized.txt
+// and trajectory_smoothed.txt are made from the run's own solutions).
+// Exit code 0 on success, 1 on bad arguments or configuration, 2 on
+// unreadable input, 3 when the output cannot be written.
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -200,6 +202,17 @@ std::string exportGraphs(const std::string& dir, const ekf_slam::SlamPipeline& p
       anchors.push_back({closer->scanStamp(s), closer->scanKey(s), closer->scanOffset(s)});
     }
     if (error.empty()) error = ekf_slam::saveScanAnchors(dir + "/pose_graph_scans.txt", anchors);
+    // The same graph from the front end's key-scan poses (no loop applied):
+    // a cold start, harder than the warm one the back end's last solve had.
+    ekf_slam::PoseGraph cold = closer->finalProblem();
+    const Pose2 frame = ekf_slam::compose(cold.pose(0), ekf_slam::inverse(closer->keyFrontEnd(0)));
+    for (int k = 1; k < cold.nodeCount() && k < closer->keyCount(); ++k) {
+      cold.setPose(k, ekf_slam::compose(frame, closer->keyFrontEnd(k)));
+    }
+    if (error.empty()) {
+      error = ekf_slam::savePoseGraph(dir + "/pose_graph_cold.txt", cold,
+                                      options.loop_closure.optimizer);
+    }
   }
   if (error.empty() && smoother_problem.poseCount() > 0) {
     error = ekf_slam::saveLandmarkGraph(dir + "/landmark_graph.txt", smoother_problem,
