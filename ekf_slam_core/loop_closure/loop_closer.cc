@@ -379,6 +379,7 @@ void LoopCloser::finish() {
     ++counters_.unconfirmed;
   }
   if (counters_.accepted == 0) return;
+  final_problem_ = graph_;
   optimise();
   // Loops the kernel no longer believes are dropped, and the rest re-solved
   // without them.
@@ -392,7 +393,10 @@ void LoopCloser::finish() {
     }
   }
   counters_.dropped += dropped;
-  if (dropped > 0) optimise();
+  if (dropped > 0) {
+    final_problem_ = graph_;
+    optimise();
+  }
 }
 
 Pose2 LoopCloser::latestPose() const {

@@ -203,6 +203,15 @@ class LoopCloser {
 
   const LoopClosureCounters& counters() const { return counters_; }
   const PoseGraph& graph() const { return graph_; }
+  // The graph as the last optimisation of finish() found it (the problem
+  // that optimisation solved); empty when finish() did not optimise.
+  const PoseGraph& finalProblem() const { return final_problem_; }
+  // Scan `scan` (addScan order) hangs off key scan scanKey(scan) (−1 before
+  // the first) at scanOffset(scan): scanPoses() composes the two.
+  int scanCount() const { return static_cast<int>(scans_.size()); }
+  int scanKey(int scan) const { return scans_[scan].key; }
+  const Pose2& scanOffset(int scan) const { return scans_[scan].offset; }
+  double scanStamp(int scan) const { return scans_[scan].stamp; }
   // Graph node `key` was taken at this scan (index in addScan order). Loop
   // edges are the graph's robust edges; the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
@@ -253,6 +262,7 @@ class LoopCloser {
   LoopClosureOptions options_;
   ScanMatcherOptions icp_;
   PoseGraph graph_;
+  PoseGraph final_problem_;  // see finalProblem()
   std::vector<KeyScan> keys_;
   std::vector<ScanEntry> scans_;
   std::vector<std::vector<std::pair<int, double>>> adjacency_;  // graph distance edges

@@ -544,10 +544,12 @@ std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
   return out;
 }
 
-std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details) const {
+std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,
+                                                         LandmarkGraph* last_problem) const {
   const std::vector<Pose2> initial = loopClosedIterationPoses();
-  FullSmootherResult result = smoothFull(full_recorder_, filter_, loopConstraints(),
-                                         options_.smoother, initial.empty() ? nullptr : &initial);
+  FullSmootherResult result =
+      smoothFull(full_recorder_, filter_, loopConstraints(), options_.smoother,
+                 initial.empty() ? nullptr : &initial, last_problem);
   std::vector<StampedPose> out = scanPosesFrom(result.poses);
   if (details) *details = std::move(result);
   return out;

@@ -228,8 +228,10 @@ class SlamPipeline {
   // Poses for every scan from the full smoother's iteration poses (scans
   // between iterations follow their odometry from the last iteration). Runs
   // the batch optimisation on every call; `details` (if given) receives its
-  // result.
-  std::vector<StampedPose> smoothedScanPoses(FullSmootherResult* details = nullptr) const;
+  // result, `last_problem` (if given) the problem of its last optimisation
+  // (see smoothFull).
+  std::vector<StampedPose> smoothedScanPoses(FullSmootherResult* details = nullptr,
+                                             LandmarkGraph* last_problem = nullptr) const;
   // The same from the thesis's RTS smoother over the pose alone (§3.4.5.1).
   std::vector<StampedPose> rtsScanPoses() const;
   std::vector<StampedPose> filteredScanPoses() const;

@@ -105,6 +105,11 @@ class LandmarkGraph {
   const std::vector<Pose2>& poses() const { return poses_; }
   const std::vector<Vector2>& landmarks() const { return landmarks_; }
   const std::vector<ObservationEdge>& observationEdges() const { return observations_; }
+  // The rest of the problem as given (for saving it: graph_io.h).
+  const Pose2& laserPose() const { return laser_; }
+  bool isFixed(int pose) const { return fixed_[pose] != 0; }
+  const std::vector<RelativePoseEdge>& relativeEdges() const { return relatives_; }
+  const std::vector<PosePriorEdge>& priorEdges() const { return priors_; }
 
   // Robust cost at the current estimate.
   double cost(double kernel_width) const;

@@ -239,7 +239,8 @@ std::vector<std::vector<int>> reassociate(const std::vector<SmootherIteration>& 
 FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
                               const std::vector<IterationConstraint>& constraints,
                               const FullSmootherOptions& options,
-                              const std::vector<Pose2>* initial_poses) {
+                              const std::vector<Pose2>* initial_poses,
+                              LandmarkGraph* last_problem) {
   FullSmootherResult result;
   const std::vector<SmootherIteration>& iterations = record.iterations();
   if (iterations.empty()) return result;
@@ -384,6 +385,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
   for (int round = 0;; ++round) {
     problem = std::make_unique<Problem>(filter.options().laser_pose);
     build(problem.get());
+    if (last_problem) *last_problem = problem->graph;
     const LandmarkGraphSummary summary = problem->graph.optimize(options.optimizer);
     if (round == 0) result.summary.initial_cost = summary.initial_cost;
     result.summary.iterations += summary.iterations;

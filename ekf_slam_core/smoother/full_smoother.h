@@ -175,11 +175,14 @@ struct FullSmootherResult {
 // each landmark then starts at the median of its sightings projected from
 // them, and with options.reassociate the sightings are associated afresh
 // against those poses. Constraints referring to unknown iterations are
-// ignored.
+// ignored. `last_problem` (optional) receives the last optimisation's
+// problem as it started (initial values included), to be saved and solved
+// again elsewhere (graph_io.h); the result does not depend on it.
 FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam& filter,
                               const std::vector<IterationConstraint>& constraints,
                               const FullSmootherOptions& options,
-                              const std::vector<Pose2>* initial_poses = nullptr);
+                              const std::vector<Pose2>* initial_poses = nullptr,
+                              LandmarkGraph* last_problem = nullptr);
 
 // The pose-space covariance of a motion edge's error
 // between(d, between(x_{k−1}, x_k)), d = applyControl(identity, u), for

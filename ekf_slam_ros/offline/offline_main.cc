@@ -5,7 +5,7 @@
 //
 //   rosrun ekf_slam ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR
 //                                    [--config YAML] [--max-scans N] [--no-figures]
-//                                    [--trace]
+//                                    [--trace] [--export-graphs DIR]
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt (the full
 // smoother: batch MAP over every pose, landmark and observation the filter
@@ -15,8 +15,18 @@
 // covariance per scan, for NEES checks), landmarks.yaml, map.pgm + map.yaml (from the
 // smoothed trajectory), map_filtered.*, map_odometry.*, the figures and
 // report.txt. report.txt is written last: a directory without it holds no
-// complete result. Exit code 0 on success, 1 on bad arguments or
-// configuration, 2 on unreadable input, 3 when the output cannot be written.
+// complete result. --export-graphs DIR also writes, into DIR, the problems of
+// the last two optimisations (ekf_slam_core/pose_graph/graph_io.h gives the
+// formats), to be solved again by other solvers (docs/solvers.md):
+// pose_graph.txt, the loop-closure pose graph as the back end's final
+// optimisation started from (when a loop was closed), pose_graph_cold.txt,
+// the same graph started from the front end's key-scan poses, and
+// landmark_graph.txt, the full smoother's last optimisation as it started;
+// with pose_graph_scans.txt and landmark_graph_scans.txt, the scan anchors
+// that turn a solution into one pose per scan (as trajectory_optimized.txt
+// and trajectory_smoothed.txt are made from the run's own solutions).
+// Exit code 0 on success, 1 on bad arguments or configuration, 2 on
+// unreadable input, 3 when the output cannot be written.
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -32,6 +42,7 @@
 #include <string>
 
 #include "ekf_slam_core/io/trajectory_file.h"
+#include "ekf_slam_core/pose_graph/graph_io.h"
 #include "ekf_slam_ros/offline/log_input.h"
 
 namespace {
@@ -52,12 +63,15 @@ std::string programDir() {
 void usage(std::ostream& out = std::cerr) {
   out << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
          "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
+         "                        [--export-graphs DIR]\n"
          "       ekf_slam_offline [--config YAML] --print-config\n"
          "       ekf_slam_offline --help\n"
          "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
          "  --print-config: every parameter with the value it would run with, then exit\n"
          "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
-         "             no figures): the fastest run, for scoring trajectories\n";
+         "             no figures): the fastest run, for scoring trajectories\n"
+         "  --export-graphs: the final loop-closure pose graph and the full smoother's\n"
+         "             last problem as text files in DIR (docs/solvers.md)\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -173,6 +187,52 @@ std::string writeFilteredCovariances(const std::string& path, const ekf_slam::Sl
   return out ? "" : path + ": write error";
 }
 
+// --export-graphs: the two problems with their scan anchors (see the top).
+std::string exportGraphs(const std::string& dir, const ekf_slam::SlamPipeline& pipeline,
+                         const ekf_slam::PipelineOptions& options,
+                         const ekf_slam::LandmarkGraph& smoother_problem) {
+  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) return dir + ": cannot create";
+  std::string error;
+  const ekf_slam::LoopCloser* closer = pipeline.loopCloser();
+  if (closer && closer->finalProblem().nodeCount() > 0) {
+    error = ekf_slam::savePoseGraph(dir + "/pose_graph.txt", closer->finalProblem(),
+                                    options.loop_closure.optimizer);
+    std::vector<ekf_slam::ScanAnchor> anchors;
+    for (int s = 0; s < closer->scanCount(); ++s) {
+      anchors.push_back({closer->scanStamp(s), closer->scanKey(s), closer->scanOffset(s)});
+    }
+    if (error.empty()) error = ekf_slam::saveScanAnchors(dir + "/pose_graph_scans.txt", anchors);
+    // The same graph from the front end's key-scan poses (no loop applied):
+    // a cold start, harder than the warm one the back end's last solve had.
+    ekf_slam::PoseGraph cold = closer->finalProblem();
+    const Pose2 frame = ekf_slam::compose(cold.pose(0), ekf_slam::inverse(closer->keyFrontEnd(0)));
+    for (int k = 1; k < cold.nodeCount() && k < closer->keyCount(); ++k) {
+      cold.setPose(k, ekf_slam::compose(frame, closer->keyFrontEnd(k)));
+    }
+    if (error.empty()) {
+      error = ekf_slam::savePoseGraph(dir + "/pose_graph_cold.txt", cold,
+                                      options.loop_closure.optimizer);
+    }
+  }
+  if (error.empty() && smoother_problem.poseCount() > 0) {
+    error = ekf_slam::saveLandmarkGraph(dir + "/landmark_graph.txt", smoother_problem,
+                                        options.smoother.optimizer);
+    // As SlamPipeline::scanPosesFrom places the scans on the iteration poses.
+    std::vector<ekf_slam::ScanAnchor> anchors;
+    for (const ekf_slam::ScanRecord& r : pipeline.scans()) {
+      if (r.iteration < 0 || r.iteration >= smoother_problem.poseCount()) {
+        anchors.push_back({r.stamp, -1, r.filtered});
+      } else {
+        anchors.push_back({r.stamp, r.iteration, between(r.odometry_at_iteration, r.odometry)});
+      }
+    }
+    if (error.empty()) {
+      error = ekf_slam::saveScanAnchors(dir + "/landmark_graph_scans.txt", anchors);
+    }
+  }
+  return error;
+}
+
 std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   if (!closer) return "off";
   const ekf_slam::LoopClosureCounters& c = closer->counters();
@@ -191,7 +251,7 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string bag_path, carmen_path, out_dir, config_path;
+  std::string bag_path, carmen_path, out_dir, config_path, export_dir;
   long max_scans = -1;
   bool figures = true;
   bool maps = true;
@@ -218,6 +278,8 @@ int main(int argc, char** argv) {
       figures = false;  // the figures draw the maps
     } else if (arg == "--trace") {
       trace = true;
+    } else if (arg == "--export-graphs" && i + 1 < argc) {
+      export_dir = argv[++i];
     } else if (arg == "--print-config") {
       print_config = true;
     } else if (arg == "--help" || arg == "-h") {
@@ -334,7 +396,9 @@ int main(int argc, char** argv) {
   const std::vector<ekf_slam::StampedPose> filtered = pipeline.filteredScanPoses();
   const auto smoothing_start = std::chrono::steady_clock::now();
   ekf_slam::FullSmootherResult smoother;
-  const std::vector<ekf_slam::StampedPose> smoothed = pipeline.smoothedScanPoses(&smoother);
+  ekf_slam::LandmarkGraph smoother_problem;
+  const std::vector<ekf_slam::StampedPose> smoothed =
+      pipeline.smoothedScanPoses(&smoother, export_dir.empty() ? nullptr : &smoother_problem);
   const double smoothing_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - smoothing_start).count();
   const std::vector<ekf_slam::StampedPose> rts = pipeline.rtsScanPoses();
@@ -380,6 +444,9 @@ int main(int argc, char** argv) {
   }
   if (maps && error.empty()) {
     error = buildMap(config.map, log, odometry, laser).save(out_dir + "/map_odometry");
+  }
+  if (error.empty() && !export_dir.empty()) {
+    error = exportGraphs(export_dir, pipeline, config.pipeline, smoother_problem);
   }
   if (!error.empty()) {
     std::cerr << "ekf_slam_offline: " << error << "\n";

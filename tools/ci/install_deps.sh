@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages this project needs, only when one is missing.
 # Idempotent and silent when everything is present. Needs root (or sudo).
-# Extra packages a target needs (clang for `make fuzz`) come as arguments.
+# Extra packages a target needs (clang for `make fuzz`, libceres-dev for
+# `make bench`) come as arguments.
 set -euo pipefail
 
 PACKAGES=(
