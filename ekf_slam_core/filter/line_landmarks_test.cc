@@ -9,9 +9,9 @@
 #include <Eigen/LU>
 #include <random>
 
-#include "ekf_slam_core/filter/chi_square.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
+#include "ekf_slam_core/testing/monte_carlo_nees.h"
 
 namespace ekf_slam {
 namespace {
@@ -398,28 +398,12 @@ TEST_P(LineConsistency, MonteCarloAveragePoseNeesIsInsideTheChiSquareBand) {
   constexpr int kRuns = 30;
   std::vector<std::vector<double>> runs;
   for (int r = 0; r < kRuns; ++r) runs.push_back(neesOfRun(200 + r, GetParam()));
-  size_t steps = runs[0].size();
-  for (const auto& run : runs) steps = std::min(steps, run.size());
-  ASSERT_GT(steps, 100u);
-  const ChiSquareBand band = averageChiSquareBand(3, kRuns, 0.95);
-  double total = 0.0;
-  int inside = 0;
-  for (size_t k = 0; k < steps; ++k) {
-    double sum = 0.0;
-    for (const auto& run : runs) sum += run[k];
-    const double average = sum / kRuns;
-    total += average;
-    if (average >= band.lower && average <= band.upper) ++inside;
-  }
-  const double anees = total / steps;
-  const double fraction_inside = static_cast<double>(inside) / steps;
-  RecordProperty("average_nees", std::to_string(anees));
-  std::cout << "average pose NEES over " << kRuns << " runs x " << steps << " steps: " << anees
-            << " (95% band [" << band.lower << ", " << band.upper
-            << "]); steps inside: " << 100.0 * fraction_inside << "%\n";
-  EXPECT_GE(anees, band.lower);
-  EXPECT_LE(anees, band.upper);
-  EXPECT_GE(fraction_inside, 0.85);
+  const testing::NeesSummary nees = testing::summariseNees(runs, 3);
+  ASSERT_GT(nees.steps, 100u);
+  RecordProperty("average_nees", std::to_string(nees.average));
+  EXPECT_GE(nees.average, nees.band.lower);
+  EXPECT_LE(nees.average, nees.band.upper);
+  EXPECT_GE(nees.fraction_inside, 0.85);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 
+#include "ekf_slam_core/testing/jacobian_assertions.h"
 #include "ekf_slam_core/testing/numerical_jacobian.h"
 
 namespace ekf_slam {
@@ -16,18 +17,10 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using testing::near;
 using testing::numericalJacobian;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-::testing::AssertionResult near(const MatrixXd& analytic, const MatrixXd& numeric, double tol) {
-  const double err = (analytic - numeric).cwiseAbs().maxCoeff();
-  if (err <= tol * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max error " << err << "\nanalytic\n"
-                                       << analytic << "\nnumeric\n"
-                                       << numeric;
-}
 
 struct MecpCase {
   const char* name;

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "ekf_slam_core/models/line_observation_model.h"
+#include "ekf_slam_core/testing/jacobian_assertions.h"
 #include "ekf_slam_core/testing/numerical_jacobian.h"
 
 namespace ekf_slam {
@@ -17,6 +18,7 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using testing::near;
 using testing::numericalJacobian;
 
 constexpr double kTol = 1e-6;
@@ -24,15 +26,6 @@ constexpr double kTol = 1e-6;
 // flip that a difference step could cross it; they get their own tests.
 constexpr double kMinTestOffset = 1e-3;
 constexpr int kRandomCases = 400;
-
-::testing::AssertionResult near(const MatrixXd& analytic, const MatrixXd& numeric, double tol) {
-  const double err = (analytic - numeric).cwiseAbs().maxCoeff();
-  if (err <= tol * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max error " << err << "\nanalytic\n"
-                                       << analytic << "\nnumeric\n"
-                                       << numeric;
-}
 
 // Random geometry; a third of the angles sit within 1 mrad of ±π.
 class Geometry {

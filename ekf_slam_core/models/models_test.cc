@@ -6,6 +6,7 @@
 
 #include "ekf_slam_core/models/odometry_motion_model.h"
 #include "ekf_slam_core/models/point_observation_model.h"
+#include "ekf_slam_core/testing/jacobian_assertions.h"
 #include "ekf_slam_core/testing/numerical_jacobian.h"
 
 namespace ekf_slam {
@@ -13,18 +14,10 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using testing::near;
 using testing::numericalJacobian;
 
 constexpr double kTol = 1e-6;
-
-::testing::AssertionResult near(const MatrixXd& analytic, const MatrixXd& numeric, double tol) {
-  const double err = (analytic - numeric).cwiseAbs().maxCoeff();
-  if (err <= tol * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max error " << err << "\nanalytic\n"
-                                       << analytic << "\nnumeric\n"
-                                       << numeric;
-}
 
 TEST(OdometryMotionModel, ControlReproducesTheOdometryIncrement) {
   std::mt19937 rng(3);
