@@ -26,7 +26,7 @@ RVIZ  ?= 0
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench benchmark fuzz sanitize sanitize-thread format check clean
+.PHONY: all deps workspace build test demo bench benchmark line-experiment fuzz sanitize sanitize-thread format check clean
 
 all: build
 
@@ -77,6 +77,12 @@ benchmark: deps
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
 	@tools/ci/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
+
+# The thesis's line-feature simulation (§4.3.5): Monte Carlo runs of points
+# only, points + (p, θ) lines and points + θ-only lines; text files and
+# figures in output/line_experiment/.
+line-experiment: deps
+	@JOBS=$(JOBS) tools/dev/line_experiment.sh $(OUT)/line_experiment
 
 # libFuzzer campaign: every fuzz target (or those in FUZZ_TARGETS),
 # FUZZ_SECONDS each (FUZZ_RUNS inputs at most when set), clang with ASan +

@@ -1,0 +1,547 @@
+// ekf_slam_line_experiment: the line-feature simulation of the thesis
+// (§4.3.5, Figs. 4.1–4.4) with this filter. A 22 m × 22 m room with sparse
+// point features and walls; the robot drives a closed path of about 98 m
+// once; the filter runs with known association (ground-truth ids) in four
+// variants that differ only in the features it uses:
+//   points                 the 24 point features alone
+//   ptheta_lines           points + walls as (p, θ) lines (kLine)
+//   theta_lines            points + walls as θ-only lines (kLineAngle), the
+//                          offset from the wall's end points when they are
+//                          in the state (thesis eqs. 4.35, 4.38)
+//   theta_lines_no_ends    points + θ-only lines, the end points never used
+//
+// The world (map frame centred on the room, m):
+//   outer walls  the square (±11, ±11);
+//   interior     y = 5.5 for x in [-5, 5]; x = 5.5 for y in [-6, 1];
+//                x = 0.5 for y in [-1.5, 1.5] (inside the inner loop);
+//   points       24: the 4 room corners and the 6 ends of the interior
+//                walls (each wall's end points, used by theta_lines), and
+//                14 free-standing posts;
+//   path         (-8,-8) (8,-8) (8,8) (-8,8) (-8,-3) (3,-3) (3,3) (-3,3)
+//                (-3,-8) and back to (-8,-8): about 98 m, one lap.
+// Sensing: a 7 m range and a 180° field of view for points and walls alike;
+// a wall is seen when the part of it inside range and field of view is at
+// least 1 m long. Nothing occludes anything (the thesis's Player/Stage run
+// did have occlusion: points behind walls are seen here).
+// Noise: odometry as the landmark simulator draws it from the filter's
+// motion model with MotionNoiseOptions' defaults (rot_per_rot 0.01,
+// rot_per_trans 0.0005, trans_per_trans 0.01, trans_per_rot 0.0001, no
+// floors, no per-metre terms; standard deviations scaled by
+// --odometry-noise-scale) at ≤ 0.15 m and ≤ 0.15 rad per step; points
+// σ_r 0.02 m, σ_φ 0.01 rad; lines σ_p 0.02 m, σ_θ 0.01 rad (the thesis does
+// not state its simulation's noise). The filter is told the true noise.
+//
+//   ekf_slam_line_experiment --out DIR [--runs N] [--seed S]
+//                            [--odometry-noise-scale F]
+//
+// Runs use seeds S, S+1, … (default 1); F (default 1) multiplies the
+// odometry noise's standard deviations, in the simulator and the filter.
+//
+// Writes into DIR, per variant V:
+//   V.txt         per step, means over the runs: step time_s pos_err_m
+//                 heading_err_rad nees point_err_m line_angle_err_rad
+//                 line_p_err_m points_in_map lines_in_map
+//                 (feature errors average over the features in each run's
+//                 map; nan where no run has one; line_p_err only for
+//                 ptheta_lines)
+//   V_path.txt    run 0: step x_true y_true x_est y_est
+//   V_map.txt     run 0 at the end: "point i x_true y_true x_est y_est" and
+//                 "line i theta_true p_true theta_est p_est" (θ-only lines:
+//                 p from the estimated end points, nan without them)
+// and runs.txt (per variant and seed: mean_pos_err_m final_pos_err_m
+// mean_point_err_m), world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and
+// summary.txt (one line per variant; columns named in its header).
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/filter/chi_square.h"
+#include "ekf_slam_core/filter/ekf_slam.h"
+#include "ekf_slam_core/sim/landmark_simulator.h"
+
+namespace {
+
+using ekf_slam::EkfSlam;
+using ekf_slam::FilterStatus;
+using ekf_slam::kPi;
+using ekf_slam::LandmarkKind;
+using ekf_slam::LineMatch;
+using ekf_slam::LineObservation;
+using ekf_slam::Matrix2;
+using ekf_slam::PointMatch;
+using ekf_slam::PolarLine;
+using ekf_slam::Pose2;
+using ekf_slam::Vector2;
+using ekf_slam::wrapAngle;
+
+constexpr double kMaxRange = 7.0;          // m
+constexpr double kFieldOfView = kPi;       // rad
+constexpr double kMinVisibleLength = 1.0;  // m of wall inside range and view
+constexpr double kLinePSigma = 0.02;       // m
+constexpr double kLineThetaSigma = 0.01;   // rad
+const double kNan = std::numeric_limits<double>::quiet_NaN();
+
+struct Wall {
+  int end[2];  // indices into points()
+};
+
+const std::vector<Vector2>& points() {
+  static const std::vector<Vector2> p = {// room corners 0–3
+                                         {-11, -11},
+                                         {11, -11},
+                                         {11, 11},
+                                         {-11, 11},
+                                         // interior wall ends 4–9
+                                         {-5, 5.5},
+                                         {5, 5.5},
+                                         {5.5, -6},
+                                         {5.5, 1},
+                                         {0.5, -1.5},
+                                         {0.5, 1.5},
+                                         // posts 10–23
+                                         {-5, -10},
+                                         {2, -10},
+                                         {10, -5},
+                                         {10, 3},
+                                         {6, 10},
+                                         {-2, 10},
+                                         {-10, 6},
+                                         {-10, -1},
+                                         {-5.5, 0},
+                                         {-1, -5.5},
+                                         {6.5, -9.5},
+                                         {-1.5, 1.0},
+                                         {1.5, -6},
+                                         {-6, -5.5}};
+  return p;
+}
+
+const std::vector<Wall>& walls() {
+  static const std::vector<Wall> w = {{{0, 1}}, {{1, 2}}, {{2, 3}}, {{3, 0}},
+                                      {{4, 5}}, {{6, 7}}, {{8, 9}}};
+  return w;
+}
+
+std::vector<Vector2> waypoints() {
+  return {{-8, -8}, {8, -8}, {8, 8}, {-8, 8}, {-8, -3}, {3, -3}, {3, 3}, {-3, 3}, {-3, -8}};
+}
+
+// The wall's infinite line in normal form, p >= 0.
+PolarLine wallLine(const Wall& wall) {
+  const Vector2 a = points()[wall.end[0]], b = points()[wall.end[1]];
+  const Vector2 u = (b - a).normalized();
+  Vector2 n(-u.y(), u.x());
+  double p = n.dot(a);
+  if (p < 0.0) {
+    n = -n;
+    p = -p;
+  }
+  return PolarLine{p, std::atan2(n.y(), n.x())};
+}
+
+// Length of the part of segment a–b within kMaxRange of the sensor and
+// inside its field of view (a wedge of at most π about its x axis).
+double visibleLength(const Pose2& sensor, const Vector2& a, const Vector2& b) {
+  const Vector2 s = sensor.translation();
+  const Vector2 u = b - a, w = a - s;
+  double lo = 0.0, hi = 1.0;
+  // The wedge: two half-planes c0 + c1 t >= 0.
+  auto clip = [&](double c0, double c1) {
+    if (std::abs(c1) < 1e-12) {
+      if (c0 < 0.0) hi = -1.0;
+      return;
+    }
+    const double t = -c0 / c1;
+    if (c1 > 0.0) {
+      lo = std::max(lo, t);
+    } else {
+      hi = std::min(hi, t);
+    }
+  };
+  for (double side : {1.0, -1.0}) {
+    // Inward normal of the edge at sensor.theta ± fov/2.
+    const double edge = sensor.theta + side * kFieldOfView / 2.0;
+    const Vector2 inward = side * Vector2(std::sin(edge), -std::cos(edge));
+    clip(inward.dot(w), inward.dot(u));
+  }
+  // The disc: |w + t u|² <= R².
+  const double qa = u.squaredNorm(), qb = 2.0 * w.dot(u),
+               qc = w.squaredNorm() - kMaxRange * kMaxRange;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (disc <= 0.0) return 0.0;
+  lo = std::max(lo, (-qb - std::sqrt(disc)) / (2.0 * qa));
+  hi = std::min(hi, (-qb + std::sqrt(disc)) / (2.0 * qa));
+  return hi > lo ? (hi - lo) * std::sqrt(qa) : 0.0;
+}
+
+enum class Variant { kPoints, kPThetaLines, kThetaLines, kThetaLinesNoEnds };
+const Variant kVariants[] = {Variant::kPoints, Variant::kPThetaLines, Variant::kThetaLines,
+                             Variant::kThetaLinesNoEnds};
+
+const char* variantName(Variant v) {
+  switch (v) {
+    case Variant::kPoints:
+      return "points";
+    case Variant::kPThetaLines:
+      return "ptheta_lines";
+    case Variant::kThetaLines:
+      return "theta_lines";
+    case Variant::kThetaLinesNoEnds:
+      return "theta_lines_no_ends";
+  }
+  return "unknown";
+}
+
+// Per-step sums over runs; a feature error enters only where the run's map
+// has that kind of feature.
+struct StepStats {
+  double pos = 0, heading = 0, nees = 0, point = 0, angle = 0, offset = 0;
+  int point_runs = 0, angle_runs = 0, offset_runs = 0;
+  double points_in_map = 0, lines_in_map = 0;
+};
+
+struct RunLog {
+  std::vector<Vector2> truth, estimate;
+};
+
+// One run's own figures, for paired comparisons between variants (every
+// variant sees the same draws of odometry and point noise for a seed).
+struct RunSummary {
+  double mean_pos = 0, final_pos = 0, mean_point = 0;
+};
+
+struct Refusals {
+  long points = 0, lines = 0, augment = 0, predict = 0;
+};
+
+// Estimated offset of a line landmark: kLine its own p; kLineAngle the
+// offset of the line with normal θ_f through the mean of its end points in
+// the map (nan when none is).
+double estimatedOffset(const EkfSlam& filter, int slot, const std::vector<int>& ends) {
+  if (filter.landmarkKind(slot) == LandmarkKind::kLine) return filter.lineLandmark(slot).p;
+  Vector2 sum = Vector2::Zero();
+  int count = 0;
+  for (int id : ends) {
+    if (id < 0) continue;
+    sum += filter.landmarkPosition(filter.slotOf(id));
+    ++count;
+  }
+  if (count == 0) return kNan;
+  const double theta = filter.lineAngle(slot);
+  return Vector2(std::cos(theta), std::sin(theta)).dot(sum / count);
+}
+
+// |p error| of a line landmark's estimate against the wall, along a common
+// normal (a normal estimated opposite to the true one flips the sign of p).
+double offsetError(double theta_est, double p_est, const PolarLine& truth) {
+  if (std::abs(wrapAngle(theta_est - truth.theta)) > kPi / 2.0) p_est = -p_est;
+  return std::abs(p_est - truth.p);
+}
+
+void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<StepStats>* stats,
+             RunLog* log, RunSummary* run, Refusals* refusals, std::ofstream* map_out) {
+  ekf_slam::sim::LandmarkSimOptions sim_options;
+  sim_options.seed = seed;
+  sim_options.landmarks = points();
+  sim_options.waypoints = waypoints();
+  sim_options.max_range = kMaxRange;
+  sim_options.field_of_view = kFieldOfView;
+  ekf_slam::MotionNoiseOptions& noise = sim_options.odometry_noise;
+  for (double* variance :
+       {&noise.rot_per_rot, &noise.rot_per_trans, &noise.trans_per_trans, &noise.trans_per_rot}) {
+    *variance *= noise_scale * noise_scale;
+  }
+  ekf_slam::sim::LandmarkSimulator sim(sim_options);
+
+  ekf_slam::FilterOptions options;
+  options.laser_pose = sim_options.laser_pose;
+  options.motion_noise = sim_options.odometry_noise;
+  options.tentative_max_age = 0;  // known association: no landmark is spurious
+  EkfSlam filter(options, sim.current().true_pose);
+
+  const bool use_lines = variant != Variant::kPoints;
+  const LandmarkKind line_kind =
+      variant == Variant::kPThetaLines ? LandmarkKind::kLine : LandmarkKind::kLineAngle;
+  std::mt19937 line_rng(seed * 104729u + 17u);
+  std::normal_distribution<double> unit;
+  std::vector<int> point_id(points().size(), -1), line_id(walls().size(), -1);
+  Matrix2 line_noise = Matrix2::Zero();
+  line_noise(0, 0) = kLinePSigma * kLinePSigma;
+  line_noise(1, 1) = kLineThetaSigma * kLineThetaSigma;
+
+  auto observe = [&](const ekf_slam::sim::SimStep& s) {
+    std::vector<PointMatch> matches;
+    std::vector<int> fresh;
+    for (size_t i = 0; i < s.observations.size(); ++i) {
+      const int id = point_id[s.true_landmark[i]];
+      if (id >= 0) {
+        matches.push_back({static_cast<int>(i), id});
+      } else {
+        fresh.push_back(static_cast<int>(i));
+      }
+    }
+    if (!matches.empty() && filter.update(s.observations, matches) != FilterStatus::kOk) {
+      ++refusals->points;
+    }
+    for (int i : fresh) {
+      if (filter.augment(s.observations[i], &point_id[s.true_landmark[i]]) != FilterStatus::kOk) {
+        ++refusals->augment;
+      }
+    }
+    if (!use_lines) return;
+    const Pose2 sensor = ekf_slam::compose(s.true_pose, sim_options.laser_pose);
+    std::vector<LineObservation> lines;
+    std::vector<LineMatch> line_matches;
+    for (size_t w = 0; w < walls().size(); ++w) {
+      const Wall& wall = walls()[w];
+      if (visibleLength(sensor, points()[wall.end[0]], points()[wall.end[1]]) < kMinVisibleLength) {
+        continue;
+      }
+      PolarLine z;
+      if (!ekf_slam::predictLineObservation(s.true_pose, sim_options.laser_pose, wallLine(wall),
+                                            &z)) {
+        continue;
+      }
+      LineObservation obs;
+      obs.covariance = line_noise;
+      obs.z.p = z.p + kLinePSigma * unit(line_rng);
+      obs.z.theta = wrapAngle(z.theta + kLineThetaSigma * unit(line_rng));
+      if (line_id[w] < 0) {
+        if (filter.augmentLine(obs, line_kind, &line_id[w]) != FilterStatus::kOk) {
+          ++refusals->augment;
+        }
+        continue;
+      }
+      lines.push_back(obs);
+      LineMatch match{static_cast<int>(lines.size()) - 1, line_id[w]};
+      if (variant == Variant::kThetaLines) {
+        int count = 0;
+        for (int e : wall.end) {
+          if (point_id[e] >= 0) match.endpoint_ids[count++] = point_id[e];
+        }
+      }
+      line_matches.push_back(match);
+    }
+    if (!line_matches.empty() && filter.updateLines(lines, line_matches) != FilterStatus::kOk) {
+      ++refusals->lines;
+    }
+  };
+
+  auto record = [&](size_t k, const ekf_slam::sim::SimStep& s) {
+    if (stats->size() <= k) stats->resize(k + 1);
+    StepStats& st = (*stats)[k];
+    const Pose2 est = filter.pose();
+    const double pos_err = std::hypot(est.x - s.true_pose.x, est.y - s.true_pose.y);
+    st.pos += pos_err;
+    run->mean_pos += pos_err;
+    run->final_pos = pos_err;
+    st.heading += std::abs(wrapAngle(est.theta - s.true_pose.theta));
+    // Step 0's pose is known exactly (zero covariance): no NEES there.
+    if (k > 0) st.nees += filter.poseNees(s.true_pose);
+    double point_sum = 0, angle_sum = 0, offset_sum = 0;
+    int point_count = 0, line_count = 0;
+    for (size_t i = 0; i < point_id.size(); ++i) {
+      if (point_id[i] < 0) continue;
+      point_sum += (filter.landmarkPosition(filter.slotOf(point_id[i])) - points()[i]).norm();
+      ++point_count;
+    }
+    for (size_t w = 0; w < line_id.size(); ++w) {
+      if (line_id[w] < 0) continue;
+      const int slot = filter.slotOf(line_id[w]);
+      const PolarLine truth = wallLine(walls()[w]);
+      const double theta = filter.landmarkKind(slot) == LandmarkKind::kLine
+                               ? filter.lineLandmark(slot).theta
+                               : filter.lineAngle(slot);
+      angle_sum += std::abs(ekf_slam::lineAngleDifference(theta, truth.theta));
+      if (filter.landmarkKind(slot) == LandmarkKind::kLine) {
+        offset_sum += offsetError(theta, filter.lineLandmark(slot).p, truth);
+      }
+      ++line_count;
+    }
+    if (point_count > 0) {
+      st.point += point_sum / point_count;
+      run->mean_point += point_sum / point_count;
+      ++st.point_runs;
+    }
+    if (line_count > 0) {
+      st.angle += angle_sum / line_count;
+      ++st.angle_runs;
+      if (line_kind == LandmarkKind::kLine) {
+        st.offset += offset_sum / line_count;
+        ++st.offset_runs;
+      }
+    }
+    st.points_in_map += point_count;
+    st.lines_in_map += line_count;
+    if (log) {
+      log->truth.push_back(s.true_pose.translation());
+      log->estimate.push_back(est.translation());
+    }
+  };
+
+  observe(sim.current());
+  record(0, sim.current());
+  Pose2 odom = sim.current().odometry;
+  size_t k = 0;
+  while (sim.next()) {
+    const ekf_slam::sim::SimStep& s = sim.current();
+    if (filter.predict(odom, s.odometry, sim_options.dt) != FilterStatus::kOk) ++refusals->predict;
+    odom = s.odometry;
+    observe(s);
+    record(++k, s);
+  }
+  run->mean_pos /= k + 1;
+  run->mean_point /= k + 1;
+
+  if (map_out) {
+    for (size_t i = 0; i < point_id.size(); ++i) {
+      if (point_id[i] < 0) continue;
+      const Vector2 est = filter.landmarkPosition(filter.slotOf(point_id[i]));
+      *map_out << "point " << i << ' ' << points()[i].x() << ' ' << points()[i].y() << ' '
+               << est.x() << ' ' << est.y() << '\n';
+    }
+    for (size_t w = 0; w < line_id.size(); ++w) {
+      if (line_id[w] < 0) continue;
+      const int slot = filter.slotOf(line_id[w]);
+      const PolarLine truth = wallLine(walls()[w]);
+      const double theta = filter.landmarkKind(slot) == LandmarkKind::kLine
+                               ? filter.lineLandmark(slot).theta
+                               : filter.lineAngle(slot);
+      std::vector<int> ends;
+      if (variant == Variant::kThetaLines) {
+        for (int e : walls()[w].end) ends.push_back(point_id[e]);
+      }
+      *map_out << "line " << w << ' ' << truth.theta << ' ' << truth.p << ' ' << theta << ' '
+               << estimatedOffset(filter, slot, ends) << '\n';
+    }
+  }
+}
+
+double ratio(double sum, int count) { return count > 0 ? sum / count : kNan; }
+
+void usage() {
+  std::cerr << "usage: ekf_slam_line_experiment --out DIR [--runs N] [--seed S]\n"
+               "                                 [--odometry-noise-scale F]\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out_dir;
+  int runs = 30;
+  unsigned first_seed = 1;
+  double noise_scale = 1.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--out" && i + 1 < argc) {
+      out_dir = argv[++i];
+    } else if (arg == "--runs" && i + 1 < argc) {
+      runs = std::atoi(argv[++i]);
+    } else if (arg == "--seed" && i + 1 < argc) {
+      first_seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
+    } else if (arg == "--odometry-noise-scale" && i + 1 < argc) {
+      noise_scale = std::atof(argv[++i]);
+    } else {
+      usage();
+      return 2;
+    }
+  }
+  if (out_dir.empty() || runs < 1 || !(noise_scale > 0.0)) {
+    usage();
+    return 2;
+  }
+  const std::string dir = out_dir + "/";
+  {
+    std::ofstream world(dir + "world.txt");
+    if (!world) {
+      std::cerr << "ekf_slam_line_experiment: cannot write into " << out_dir << "\n";
+      return 2;
+    }
+    world << "# wall x1 y1 x2 y2 | point x y (map frame, m)\n";
+    for (const Wall& w : walls()) {
+      const Vector2 a = points()[w.end[0]], b = points()[w.end[1]];
+      world << "wall " << a.x() << ' ' << a.y() << ' ' << b.x() << ' ' << b.y() << '\n';
+    }
+    for (const Vector2& p : points()) world << "point " << p.x() << ' ' << p.y() << '\n';
+  }
+
+  const ekf_slam::ChiSquareBand band = ekf_slam::averageChiSquareBand(3, runs, 0.95);
+  std::ofstream summary(dir + "summary.txt");
+  summary << "# variant runs steps mean_pos_err_m final_pos_err_m mean_heading_err_rad "
+             "final_heading_err_rad average_nees band_lower band_upper steps_inside_band "
+             "consistent mean_point_err_m final_point_err_m final_line_angle_err_rad "
+             "refused_updates\n";
+  std::ofstream per_run(dir + "runs.txt");
+  per_run << "# variant seed mean_pos_err_m final_pos_err_m mean_point_err_m\n";
+  const double dt = ekf_slam::sim::LandmarkSimOptions().dt;
+  for (Variant variant : kVariants) {
+    const std::string name = variantName(variant);
+    std::vector<StepStats> stats;
+    Refusals refusals;
+    RunLog log;
+    std::ofstream map_out(dir + name + "_map.txt");
+    map_out << "# point i x_true y_true x_est y_est | line i theta_true p_true theta_est p_est\n";
+    for (int r = 0; r < runs; ++r) {
+      RunSummary run;
+      runOnce(variant, first_seed + r, noise_scale, &stats, r == 0 ? &log : nullptr, &run,
+              &refusals, r == 0 ? &map_out : nullptr);
+      per_run << name << ' ' << first_seed + r << ' ' << run.mean_pos << ' ' << run.final_pos << ' '
+              << run.mean_point << '\n';
+    }
+    std::ofstream path(dir + name + "_path.txt");
+    path << "# step x_true y_true x_est y_est (run 0)\n";
+    for (size_t k = 0; k < log.truth.size(); ++k) {
+      path << k << ' ' << log.truth[k].x() << ' ' << log.truth[k].y() << ' ' << log.estimate[k].x()
+           << ' ' << log.estimate[k].y() << '\n';
+    }
+    std::ofstream out(dir + name + ".txt");
+    out << "# " << name << ", " << runs
+        << " runs; means over runs. step time_s pos_err_m heading_err_rad nees point_err_m "
+           "line_angle_err_rad line_p_err_m points_in_map lines_in_map\n";
+    double pos_total = 0, heading_total = 0, nees_total = 0, point_total = 0;
+    int inside = 0, point_steps = 0;
+    for (size_t k = 0; k < stats.size(); ++k) {
+      const StepStats& st = stats[k];
+      const double nees = k > 0 ? st.nees / runs : kNan;
+      out << k << ' ' << k * dt << ' ' << st.pos / runs << ' ' << st.heading / runs << ' ' << nees
+          << ' ' << ratio(st.point, st.point_runs) << ' ' << ratio(st.angle, st.angle_runs) << ' '
+          << ratio(st.offset, st.offset_runs) << ' ' << st.points_in_map / runs << ' '
+          << st.lines_in_map / runs << '\n';
+      pos_total += st.pos / runs;
+      heading_total += st.heading / runs;
+      if (k > 0) {
+        nees_total += nees;
+        if (nees >= band.lower && nees <= band.upper) ++inside;
+      }
+      if (st.point_runs > 0) {
+        point_total += st.point / st.point_runs;
+        ++point_steps;
+      }
+    }
+    const size_t steps = stats.size();
+    const StepStats& last = stats.back();
+    const double average_nees = nees_total / (steps - 1);
+    const bool consistent = average_nees >= band.lower && average_nees <= band.upper;
+    char line[512];
+    std::snprintf(
+        line, sizeof line,
+        "%s %d %zu %.4f %.4f %.5f %.5f %.3f %.3f %.3f %.3f %s %.4f %.4f %s %ld\n", name.c_str(),
+        runs, steps, pos_total / steps, last.pos / runs, heading_total / steps, last.heading / runs,
+        average_nees, band.lower, band.upper, static_cast<double>(inside) / (steps - 1),
+        consistent ? "yes" : "no", point_total / std::max(point_steps, 1),
+        ratio(last.point, last.point_runs),
+        last.angle_runs > 0 ? std::to_string(last.angle / last.angle_runs).c_str() : "nan",
+        refusals.points + refusals.lines + refusals.augment + refusals.predict);
+    summary << line;
+    std::cout << line;
+  }
+  return 0;
+}
