@@ -18,6 +18,18 @@ bool isValidCovariance2(const Matrix2& c) {
          c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
 }
 
+// Symmetrises the stacked innovation covariance S and factors it; kOk
+// when S = L Lᵀ with a positive diagonal.
+FilterStatus factorInnovation(Eigen::MatrixXd* S, Eigen::LLT<Eigen::MatrixXd>* llt) {
+  *S = 0.5 * (*S + S->transpose()).eval();
+  if (!isFiniteMatrix(*S)) return FilterStatus::kNonFiniteInput;
+  llt->compute(*S);
+  if (llt->info() != Eigen::Success || !(llt->matrixLLT().diagonal().minCoeff() > 0.0)) {
+    return FilterStatus::kSingularInnovation;
+  }
+  return FilterStatus::kOk;
+}
+
 }  // namespace
 
 const char* toString(FilterStatus status) {
@@ -210,12 +222,9 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
     innovation(2 * i) = obs.z.range - predictions[i].z.range;
     innovation(2 * i + 1) = wrapAngle(obs.z.bearing - predictions[i].z.bearing);
   }
-  S = 0.5 * (S + S.transpose()).eval();
-  if (!isFiniteMatrix(S)) return FilterStatus::kNonFiniteInput;
-  const Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
-    return FilterStatus::kSingularInnovation;
-  }
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  const FilterStatus factored = factorInnovation(&S, &llt);
+  if (factored != FilterStatus::kOk) return factored;
 
   if (nis) {
     nis->resize(k);
@@ -225,12 +234,7 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
     }
   }
 
-  // With S = L Lᵀ and W = P Hᵀ L⁻ᵀ:  x += W L⁻¹ ν,  P −= W Wᵀ.
-  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // 2k × n
-  const Eigen::VectorXd whitened = llt.matrixL().solve(innovation);
-  x_.head(n).noalias() += Wt.transpose() * whitened;
-  x_(2) = wrapAngle(x_(2));
-  P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
+  applyGain(PHt, llt, innovation);
   mirrorPoseRowsAndLandmarkBlocks();
 
   for (int i = 0; i < k; ++i) {
@@ -239,6 +243,17 @@ FilterStatus EkfSlam::update(const std::vector<PointObservation>& observations,
     info.last_seen_step = step_;
   }
   return FilterStatus::kOk;
+}
+
+void EkfSlam::applyGain(const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
+                        const Eigen::VectorXd& innovation) {
+  // With S = L Lᵀ and W = P Hᵀ L⁻ᵀ:  x += W L⁻¹ ν,  P −= W Wᵀ.
+  const int n = dim_;
+  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // rows of ν × n
+  const Eigen::VectorXd whitened = llt.matrixL().solve(innovation);
+  x_.head(n).noalias() += Wt.transpose() * whitened;
+  x_(2) = wrapAngle(x_(2));
+  P_.topLeftCorner(n, n).selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
 }
 
 void EkfSlam::mirrorPoseRowsAndLandmarkBlocks() {
@@ -799,12 +814,9 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
     }
     S.block(offset[i], offset[i], r, r) += line.noise.topLeftCorner(r, r);
   }
-  S = 0.5 * (S + S.transpose()).eval();
-  if (!isFiniteMatrix(S)) return FilterStatus::kNonFiniteInput;
-  const Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0.0)) {
-    return FilterStatus::kSingularInnovation;
-  }
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  const FilterStatus factored = factorInnovation(&S, &llt);
+  if (factored != FilterStatus::kOk) return factored;
   if (nis) {
     nis->resize(k);
     for (int i = 0; i < k; ++i) {
@@ -813,10 +825,7 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
       (*nis)[i] = v.dot(S.block(offset[i], offset[i], r, r).ldlt().solve(v));
     }
   }
-  const Eigen::MatrixXd Wt = llt.matrixL().solve(PHt.transpose());  // m × n
-  const Eigen::VectorXd whitened = llt.matrixL().solve(innovation);
-  x_.head(n).noalias() += Wt.transpose() * whitened;
-  x_(2) = wrapAngle(x_(2));
+  applyGain(PHt, llt, innovation);
   // Line landmarks back to their normal form (p >= 0, θ wrapped), which
   // leaves the line unchanged; a p crossing zero negates that row of P.
   for (int slot = 0; slot < landmarkCount(); ++slot) {
@@ -824,11 +833,7 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
     if (landmarks_[slot].kind == LandmarkKind::kLineAngle) x_(i) = wrapAngle(x_(i));
     if (landmarks_[slot].kind != LandmarkKind::kLine) continue;
     x_(i + 1) = wrapAngle(x_(i + 1));
-  }
-  P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
-  for (int slot = 0; slot < landmarkCount(); ++slot) {
-    const int i = landmarkIndex(slot);
-    if (landmarks_[slot].kind != LandmarkKind::kLine || x_(i) >= 0.0) continue;
+    if (x_(i) >= 0.0) continue;
     x_(i) = -x_(i);
     x_(i + 1) = wrapAngle(x_(i + 1) + kPi);
     // Negate row and column i of the lower triangle (the diagonal keeps its sign).

@@ -24,6 +24,7 @@
 // state is unchanged, so a caller can count, log and carry on.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <string>
 #include <unordered_map>
@@ -255,6 +256,10 @@ class EkfSlam {
 
  private:
   void reserve(int dim);
+  // The update's last step, shared by points and lines: x += W L⁻¹ ν and
+  // the downdate P −= W Wᵀ of the lower triangle, W = P Hᵀ L⁻ᵀ.
+  void applyGain(const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
+                 const Eigen::VectorXd& innovation);
   void mirrorPoseRowsAndLandmarkBlocks();
   void fillLandmarkColumns(const std::vector<int>& slots);
   void removeSlots(const std::vector<int>& slots);

@@ -74,7 +74,10 @@ struct MixedMap {
 
 MixedMap mixedMap() {
   sim::LandmarkSimOptions sim_options;
-  MixedMap map{EkfSlam(optionsFor(sim_options), Pose2(0.0, 0.0, 0.0), Matrix3::Identity() * 1e-4)};
+  MixedMap map{EkfSlam(optionsFor(sim_options), Pose2(0.0, 0.0, 0.0), Matrix3::Identity() * 1e-4),
+               -1,
+               -1,
+               {}};
   EkfSlam& filter = map.filter;
   const Pose2& laser = sim_options.laser_pose;
   std::mt19937 rng(7);
