@@ -51,7 +51,12 @@ check:
 	@tools/ci/check_catkin_lint.sh
 	@tools/ci/check_rosdep.sh
 
+# The test programs are built here with -j$(JOBS): `catkin_make run_tests`
+# (one job, so that the rostests never share the machine) would otherwise
+# compile them one at a time.
 test: build check
+	@cd $(WS) && catkin_make -j$(JOBS) tests > $(WS)/build_tests.log 2>&1 \
+	  || { tail -n 60 $(WS)/build_tests.log; echo "building the tests failed; full log: $(WS)/build_tests.log"; exit 1; }
 	@tools/ci/run_tests.sh $(WS)
 
 demo: build
