@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace ekf_slam {
@@ -94,6 +95,7 @@ RelationErrors evaluateRelations(const std::vector<Relation>& relations,
     const double te = std::hypot(e.x, e.y), re = std::abs(wrapAngle(e.theta));
     out.translation_errors.push_back(te);
     out.rotation_errors.push_back(re);
+    out.spans.push_back(std::abs(r.t2 - r.t1));
     t_sq.push_back(te * te);
     r_sq.push_back(re * re);
   }
@@ -103,6 +105,32 @@ RelationErrors evaluateRelations(const std::vector<Relation>& relations,
   out.translation_squared = stats(t_sq);
   out.rotation_squared = stats(r_sq);
   return out;
+}
+
+std::vector<SpanBin> errorsBySpan(const RelationErrors& errors, const std::vector<double>& edges) {
+  std::vector<SpanBin> bins(edges.size());
+  for (size_t k = 0; k < edges.size(); ++k) {
+    bins[k].from = edges[k];
+    bins[k].to = k + 1 < edges.size() ? edges[k + 1] : std::numeric_limits<double>::infinity();
+  }
+  double total = 0.0;
+  for (double t : errors.translation_errors) total += t;
+  for (size_t i = 0; i < errors.spans.size(); ++i) {
+    for (SpanBin& bin : bins) {
+      if (errors.spans[i] < bin.from || errors.spans[i] >= bin.to) continue;
+      ++bin.relations;
+      bin.translation_mean += errors.translation_errors[i];
+      bin.rotation_mean += errors.rotation_errors[i];
+      break;
+    }
+  }
+  for (SpanBin& bin : bins) {
+    if (total > 0.0) bin.translation_share = bin.translation_mean / total;
+    if (bin.relations == 0) continue;
+    bin.translation_mean /= bin.relations;
+    bin.rotation_mean /= bin.relations;
+  }
+  return bins;
 }
 
 }  // namespace ekf_slam

@@ -40,6 +40,7 @@ struct RelationErrors {
   ErrorStats rotation_squared;             // rad²
   std::vector<double> translation_errors;  // per used relation
   std::vector<double> rotation_errors;
+  std::vector<double> spans;  // s, |t2 − t1| per used relation
 };
 
 // Poses are looked up by stamp within `stamp_tolerance` seconds (the nearest
@@ -47,5 +48,18 @@ struct RelationErrors {
 RelationErrors evaluateRelations(const std::vector<Relation>& relations,
                                  const std::vector<StampedPose>& trajectory,
                                  double stamp_tolerance = 1e-4);
+
+// The errors split by how far apart the two poses of a relation are in
+// time: short relations measure the local accuracy (the front end), long
+// ones whether revisits agree (loop closure). Bin k holds the relations
+// with span in [edges[k], edges[k + 1]); the last bin is open above.
+struct SpanBin {
+  double from = 0.0, to = 0.0;  // s; `to` is infinity for the last bin
+  int relations = 0;
+  double translation_mean = 0.0;   // m
+  double rotation_mean = 0.0;      // rad
+  double translation_share = 0.0;  // of the sum of all translational errors
+};
+std::vector<SpanBin> errorsBySpan(const RelationErrors& errors, const std::vector<double>& edges);
 
 }  // namespace ekf_slam

@@ -54,6 +54,34 @@ TEST(Relations, KnownPerturbationGivesKnownErrors) {
   EXPECT_NEAR(e.translation.mean, 0.5, 1e-12);
   EXPECT_NEAR(e.rotation.mean, 0.1, 1e-12);
   EXPECT_NEAR(e.translation_squared.mean, 0.25, 1e-12);
+  ASSERT_EQ(e.spans.size(), 1u);
+  EXPECT_NEAR(e.spans[0], 0.25, 1e-12);
+}
+
+TEST(Relations, ErrorsSplitBySpan) {
+  // Relations 3 poses (0.75 s) and 20 poses (5 s) apart; only the far end
+  // of the long ones is disturbed.
+  const std::vector<StampedPose> truth = wiggle(40);
+  std::vector<Relation> relations;
+  for (int i = 0; i < 10; ++i) {
+    relations.push_back(
+        {truth[i].stamp, truth[i + 3].stamp, between(truth[i].pose, truth[i + 3].pose)});
+    relations.push_back(
+        {truth[i].stamp, truth[i + 20].stamp, between(truth[i].pose, truth[i + 20].pose)});
+  }
+  std::vector<StampedPose> estimate = truth;
+  for (int i = 20; i < 30; ++i) estimate[i].pose = compose(truth[i].pose, Pose2(0.0, 0.2, 0.05));
+  const std::vector<SpanBin> bins =
+      errorsBySpan(evaluateRelations(relations, estimate), {0.0, 1.0, 10.0});
+  ASSERT_EQ(bins.size(), 3u);
+  EXPECT_EQ(bins[0].relations, 10);
+  EXPECT_NEAR(bins[0].translation_mean, 0.0, 1e-12);
+  EXPECT_EQ(bins[1].relations, 10);
+  EXPECT_NEAR(bins[1].translation_mean, 0.2, 1e-12);
+  EXPECT_NEAR(bins[1].rotation_mean, 0.05, 1e-12);
+  EXPECT_NEAR(bins[1].translation_share, 1.0, 1e-12);
+  EXPECT_EQ(bins[2].relations, 0);
+  EXPECT_TRUE(std::isinf(bins[2].to));
 }
 
 TEST(Relations, StampsMatchWithinToleranceOnlyAndOrderDoesNotMatter) {

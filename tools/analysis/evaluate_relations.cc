@@ -2,12 +2,17 @@
 // (../shared/datasets/README.md) for a trajectory file.
 //
 //   evaluate_relations --relations FILE --trajectory FILE [--tolerance S]
-//                      [--allow-missing] [--label NAME]
+//                      [--allow-missing] [--label NAME] [--by-span]
 //
 // Prints mean ± std of the absolute translational (m) and rotational (deg)
-// errors and of their squares, and the relations used. Exit code 1 when a
+// errors and of their squares, and the relations used. --by-span adds the
+// means by the time between a relation's two poses (under 5 s, 5–30 s,
+// 30–120 s, 120–300 s, 300 s and more) and each group's share of the
+// summed translational error: the short groups show the local accuracy,
+// the long ones whether revisits agree. Exit code 1 when a
 // relation does not find its two poses (unless --allow-missing), 2 on usage
 // or file errors.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -18,7 +23,7 @@
 int main(int argc, char** argv) {
   std::string relations_path, trajectory_path, label = "trajectory";
   double tolerance = 1e-4;
-  bool allow_missing = false;
+  bool allow_missing = false, by_span = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--relations" && i + 1 < argc) {
@@ -31,9 +36,11 @@ int main(int argc, char** argv) {
       label = argv[++i];
     } else if (arg == "--allow-missing") {
       allow_missing = true;
+    } else if (arg == "--by-span") {
+      by_span = true;
     } else {
       std::cerr << "usage: evaluate_relations --relations FILE --trajectory FILE [--tolerance S]"
-                   " [--allow-missing] [--label NAME]\n";
+                   " [--allow-missing] [--label NAME] [--by-span]\n";
       return 2;
     }
   }
@@ -59,6 +66,17 @@ int main(int argc, char** argv) {
       e.translation_squared.mean, e.translation_squared.stddev, e.rotation.mean * deg,
       e.rotation.stddev * deg, e.rotation_squared.mean * deg * deg,
       e.rotation_squared.stddev * deg * deg);
+  if (by_span) {
+    for (const ekf_slam::SpanBin& bin : ekf_slam::errorsBySpan(e, {0.0, 5.0, 30.0, 120.0, 300.0})) {
+      const std::string range = std::isinf(bin.to)
+                                    ? ">= " + std::to_string(static_cast<int>(bin.from)) + " s"
+                                    : std::to_string(static_cast<int>(bin.from)) + "-" +
+                                          std::to_string(static_cast<int>(bin.to)) + " s";
+      std::printf("  span %-10s %5d relations  %.4f m  %.3f deg  (%.0f %% of the error)\n",
+                  range.c_str(), bin.relations, bin.translation_mean, bin.rotation_mean * deg,
+                  100.0 * bin.translation_share);
+    }
+  }
   if (e.used < e.relations && !allow_missing) {
     std::fprintf(stderr, "evaluate_relations: %d relations did not find both poses within %.6f s\n",
                  e.relations - e.used, tolerance);
