@@ -1,17 +1,25 @@
 // Room gating of data association (thesis §4.4.5): every point landmark is
-// labelled with the room it was mapped in, and an observation is only
-// compared with landmarks of the rooms the robot is in, so that two features
-// close in metric terms but on either side of a wall are never paired.
+// labelled with the room it was mapped in, and an observation is compared
+// only with landmarks of its own room, so that two features close in metric
+// terms but on either side of a wall are never paired.
 //
-// The robot's rooms: the room of its position in the RoomMap; when it
-// stands within doorway_radius of a doorway's centre (where the map draws
-// the opening as a barrier, and where it sees into both rooms) both rooms
-// the doorway joins; when its position falls on a barrier elsewhere (a
-// drifting estimate against a wall) the rooms it was last in.
-// A landmark's rooms: roomOf(landmark, robot position) at augmentation; a
-// landmark within jamb_radius of a doorway's end (a door jamb, one feature
-// that borders both rooms) carries both of that doorway's rooms. A landmark
-// without a label (room unknown) is never excluded.
+// Rooms of a point p seen from the sensor at s (landmarks at augmentation,
+// observations at association, both at their estimated map positions):
+// RoomMap::roomOf(p, s), the room of the first free cell on the way from p
+// to s. A point on a wall's face lies in the wall's barrier; walking toward
+// the sensor leaves it on the side it was seen from, so a drift across the
+// wall smaller than the barrier's half-width (wall_inflation) does not
+// change the label. A point within jamb_radius of a doorway's end (a door
+// jamb, one feature bordering both rooms) is in both of the doorway's rooms.
+// When no free cell lies on the way (the sensor stands in a doorway, whose
+// opening the map draws as a barrier, and looks along the wall), the point
+// is in the rooms of the doorways within doorway_radius of the sensor: an
+// observation there may still pair across that wall.
+//
+// Why the observation's room and not the robot's: through a doorway the
+// robot sees the next room's features, which then belong to that room; a
+// gate on the robot's room would refuse their landmarks and map them again
+// at every scan.
 #pragma once
 
 #include <unordered_map>
@@ -24,29 +32,28 @@
 namespace ekf_slam {
 
 struct RoomGateOptions {
-  double doorway_radius = 0.8;  // m: robot this close to a doorway's centre is in both rooms
-  double jamb_radius = 0.3;     // m: landmark this close to a doorway's end borders both rooms
+  double jamb_radius = 0.3;     // m: a point this close to a doorway's end borders both rooms
+  double doorway_radius = 0.8;  // m: a sensor this close to a doorway's centre stands in it
 };
 
 class RoomGate {
  public:
-  // `rooms` built from `walls` with `doorways` (findDoorways on the same
-  // walls); the sides of each doorway are looked up once here.
+  // `rooms` built from walls with `doorways` (findDoorways on the same
+  // walls); the two sides of each doorway are looked up once here.
   RoomGate(RoomMap rooms, std::vector<Doorway> doorways, const RoomGateOptions& options = {});
 
-  // Moves the robot to `position` (map frame); returns the rooms it is in
-  // now (empty until its position has once been in a room).
-  const std::vector<int>& moveRobot(const Vector2& position);
-  const std::vector<int>& robotRooms() const { return robot_rooms_; }
+  // The rooms of `point` seen from `seen_from` (map frame); empty when
+  // unknown (outside the map, or no free cell on the way).
+  std::vector<int> roomsOf(const Vector2& point, const Vector2& seen_from) const;
 
   // Labels landmark `id` at `position`, seen from `seen_from`.
   void labelLandmark(int id, const Vector2& position, const Vector2& seen_from);
-  // The landmark's rooms; empty when unlabelled or its room is unknown.
+  // The landmark's rooms; empty when unlabelled or unknown.
   std::vector<int> landmarkRooms(int id) const;
 
-  // Whether landmark `id` may be an association candidate for the robot's
-  // current rooms: unlabelled landmarks and an unknown robot room allow it.
-  bool allows(int id) const;
+  // Whether landmark `id` may be paired with an observation in `rooms`:
+  // yes when they share a room, or when either side's room is unknown.
+  bool allows(int id, const std::vector<int>& rooms) const;
 
   const RoomMap& rooms() const { return rooms_; }
   const std::vector<Doorway>& doorways() const { return doorways_; }
@@ -56,18 +63,22 @@ class RoomGate {
   std::vector<Doorway> doorways_;
   std::vector<std::vector<int>> doorway_rooms_;  // per doorway: the rooms on its two sides
   RoomGateOptions options_;
-  std::vector<int> robot_rooms_;
   std::unordered_map<int, std::vector<int>> landmark_rooms_;
 };
 
-// Association (associate(), unchanged) among the point landmarks the gate
-// allows: the landmarks of other rooms are removed from a copy of the
-// filter (marginalised: the others' predictions do not change), so they
-// never become candidates, matches or reasons to leave an observation
-// ambiguous. Landmark ids in the result are those of `filter`. Costs a copy
-// of the filter (O(n²)) per call.
+// Association (associate(), unchanged) with each observation compared only
+// with the point landmarks of its rooms. Observations are placed in the
+// map at the filter's pose estimate and grouped by their rooms; each group
+// is associated on a copy of the filter without the landmarks it may not
+// see (marginalised: the others' predictions do not change), so those are
+// never candidates, matches or reasons to leave an observation ambiguous.
+// A landmark two groups both match (a jamb) keeps the smaller d²; the
+// other observation becomes kAmbiguous. Landmark ids are those of `filter`.
+// Costs a copy of the filter (O(n²)) per group. `observation_rooms` (if
+// given) receives each observation's rooms.
 AssociationResult associateInRooms(const EkfSlam& filter,
                                    const std::vector<PointObservation>& observations,
-                                   const AssociationOptions& options, const RoomGate& gate);
+                                   const AssociationOptions& options, const RoomGate& gate,
+                                   std::vector<std::vector<int>>* observation_rooms = nullptr);
 
 }  // namespace ekf_slam
