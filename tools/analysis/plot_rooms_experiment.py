@@ -24,8 +24,9 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
 
 TITLE = {"open": "open association (every landmark)",
-         "rooms": "room-gated association"}
-COLOR = {"open": "tab:red", "rooms": "tab:blue"}
+         "robot_room": "gated by the robot's room",
+         "observation_room": "gated by the observation's room"}
+COLOR = {"open": "tab:red", "robot_room": "tab:orange", "observation_room": "tab:blue"}
 
 
 def read_table(path):
@@ -63,7 +64,7 @@ def draw_world(ax, world):
 def plot_maps(directory, modes, out_path):
     world = read_tagged(os.path.join(directory, "world.txt"))
     features = np.array(world["point"])
-    fig, axes = plt.subplots(len(modes), 1, figsize=(11, 4.4 * len(modes)))
+    fig, axes = plt.subplots(len(modes), 1, figsize=(11, 4.0 * len(modes)))
     for ax, mode in zip(np.atleast_1d(axes), modes):
         draw_world(ax, world)
         path = np.loadtxt(os.path.join(directory, mode + "_path.txt"), ndmin=2)
@@ -121,37 +122,43 @@ def plot_errors(directory, modes, summary, out_path):
     print("wrote %s" % out_path)
 
 
-def paired(runs, column):
+def paired(runs, mode, column):
     by_mode = {}
     for row in runs:
         by_mode.setdefault(row["mode"], {})[row["seed"]] = float(row[column])
-    if "open" not in by_mode or "rooms" not in by_mode:
+    if "open" not in by_mode or mode not in by_mode:
         return None
-    seeds = sorted(set(by_mode["open"]) & set(by_mode["rooms"]))
-    diff = np.array([by_mode["rooms"][s] - by_mode["open"][s] for s in seeds])
+    seeds = sorted(set(by_mode["open"]) & set(by_mode[mode]))
+    diff = np.array([by_mode[mode][s] - by_mode["open"][s] for s in seeds])
     se = diff.std(ddof=1) / math.sqrt(len(diff)) if len(diff) > 1 else float("nan")
     return diff.mean(), se, int((diff < 0).sum()), len(diff)
 
 
 def write_table(summary, runs, out_path):
     lines = ["| association | runs | matches / run | mis-associations / run | "
-             "cross-wall / run (total; runs with any) | landmarks / run (duplicates) | "
+             "cross-wall / run (total; in a doorway; runs with any) | "
+             "landmarks / run (duplicates) | "
              "mean / final position error (m) | average pose NEES |",
              "|---|---|---|---|---|---|---|---|"]
     for row in summary:
-        lines.append("| %s | %s | %.0f | %s | %s (%s; %s) | %s (%s) | %s / %s | %s |" % (
+        lines.append("| %s | %s | %.0f | %s | %s (%s; %s; %s) | %s (%s) | %s / %s | %s |" % (
             TITLE.get(row["mode"], row["mode"]), row["runs"], float(row["matches_per_run"]),
             row["mis_per_run"], row["cross_wall_per_run"], row["cross_wall_total"],
-            row["runs_with_cross_wall"], row["landmarks_per_run"], row["duplicates_per_run"],
+            row["cross_wall_at_door_total"], row["runs_with_cross_wall"], row["landmarks_per_run"], row["duplicates_per_run"],
             row["mean_pos_err_m"], row["final_pos_err_m"], row["average_nees"]))
-    lines.append("")
-    lines.append("Paired over seeds, room-gated minus open: mean ± standard error "
-                 "(gated lower in k of n runs)")
-    lines.append("")
-    for column in ["cross_wall", "mis_associations", "mean_pos_err_m", "final_pos_err_m"]:
-        result = paired(runs, column)
-        if result:
-            lines.append("- %s: %+.4f ± %.4f (%d of %d)" % ((column,) + result))
+    for row in summary:
+        mode = row["mode"]
+        if mode == "open":
+            continue
+        lines.append("")
+        lines.append("Paired over seeds, %s minus open: mean ± standard error "
+                     "(gated lower in k of n runs)" % TITLE.get(mode, mode))
+        lines.append("")
+        for column in ["cross_wall", "mis_associations", "duplicates", "mean_pos_err_m",
+                       "final_pos_err_m"]:
+            result = paired(runs, mode, column)
+            if result:
+                lines.append("- %s: %+.4f ± %.4f (%d of %d)" % ((column,) + result))
     with open(out_path, "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))

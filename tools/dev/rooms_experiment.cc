@@ -2,14 +2,18 @@
 // Figs. 4.7–4.8) with this filter. Three rooms in a row joined by doors; the
 // robot explores each room in turn and drives back through all of them to
 // its start; the filter associates its point observations itself (nearest
-// neighbour, AssociationOptions' defaults) in two modes that differ only in
-// the candidates:
-//   open     every landmark of the map;
-//   rooms    the landmarks of the observation's room (room gating,
-//            mecp/room_gating.h): each landmark labelled at augmentation,
-//            and each observation at association, with
-//            RoomMap::roomOf(its estimated position, the laser's estimated
-//            position), door jambs with both rooms.
+// neighbour, AssociationOptions' defaults) in three modes that differ only
+// in the candidates:
+//   open              every landmark of the map;
+//   robot_room        the landmarks of the robot's room (both rooms of a
+//                     doorway within 0.8 m; no gate when its estimate is on
+//                     a wall's barrier elsewhere);
+//   observation_room  the landmarks of the observation's room
+//                     (associateInRooms, mecp/room_gating.h).
+// Both gates label each landmark at augmentation with
+// RoomGate::roomsOf(its estimated position, the laser's estimated
+// position), door jambs with both rooms; observation_room labels each
+// observation the same way.
 // The rooms come from the true walls (findDoorways + RoomMap, walls
 // inflated by 0.25 m): the filter here maps points only, so it holds no
 // walls to derive them from.
@@ -22,11 +26,11 @@
 //              walls, 0.1 m from the next room's corners across the wall),
 //              the 8 door jambs (each wall end's two corners), a post in
 //              each room, and 8 pieces of furniture against the interior
-//              walls, in pairs facing each other across a wall 0.5–0.55 m
+//              walls, in pairs facing each other across a wall 0.5–0.6 m
 //              apart;
 //   path       each room's square loop 1.5 m inside its walls, from room
 //              to room through the doors along y = 3, then straight back
-//              to room 1: about XX m, one lap.
+//              to room 1: about 57 m, one lap.
 // Sensing: 360° (the thesis's two lasers), 5 m range; the walls (as their
 // centre lines) occlude. Noise: odometry drawn from the filter's motion
 // model with MotionNoiseOptions' defaults, standard deviations times
@@ -36,7 +40,7 @@
 //   ekf_slam_rooms_experiment --out DIR [--runs N] [--seed S]
 //                             [--odometry-noise-scale F]
 //
-// Runs use seeds S, S+1, … (default 1; 20 runs); both modes see the same
+// Runs use seeds S, S+1, … (default 1; 20 runs); every mode sees the same
 // draws for a seed. A match pairs an observation of true feature A with a
 // landmark created from feature B; it is a mis-association when A ≠ B and
 // a cross-wall one when A and B share no room (a jamb is in both of its
@@ -45,7 +49,9 @@
 // Writes into DIR:
 //   world.txt      "wall x1 y1 x2 y2", "point x y room_a room_b" (room_b −1
 //                  unless a jamb), "door x1 y1 x2 y2" (the openings found)
-//   summary.txt    one line per mode; columns named in its header
+//   summary.txt    one line per mode; columns named in its header (the
+//                  cross-wall matches made with the robot's estimate within
+//                  0.8 m of a doorway's centre are also counted apart)
 //   runs.txt       per mode and seed: matches mis_associations cross_wall
 //                  landmarks duplicates mean_pos_err_m final_pos_err_m
 //   M.txt          per mode M, per step, means over the runs: step time_s
@@ -95,6 +101,7 @@ constexpr double kSightMargin = 1e-3;  // m: a sight line may end on the wall it
 // with the pose's heading error); past the barrier it would be labelled
 // with the space behind the wall. 0.25 m is about five σ.
 constexpr double kWallInflation = 0.25;
+constexpr double kAtDoor = 0.8;  // m from a doorway's centre: the robot stands in it
 
 struct Feature {
   Vector2 position;
@@ -185,8 +192,35 @@ bool inSight(const Vector2& sensor, const Vector2& point, const std::vector<Segm
   return true;
 }
 
-enum class Mode { kOpen, kRooms };
-const char* modeName(Mode m) { return m == Mode::kOpen ? "open" : "rooms"; }
+enum class Mode { kOpen, kRobotRoom, kObservationRoom };
+const char* modeName(Mode m) {
+  switch (m) {
+    case Mode::kOpen:
+      return "open";
+    case Mode::kRobotRoom:
+      return "robot_room";
+    case Mode::kObservationRoom:
+      return "observation_room";
+  }
+  return "unknown";
+}
+
+// Association among the landmarks of the rooms the sensor's estimate is in.
+ekf_slam::AssociationResult associateInRobotRoom(const EkfSlam& filter,
+                                                 const std::vector<PointObservation>& observations,
+                                                 const ekf_slam::AssociationOptions& options,
+                                                 const ekf_slam::RoomGate& gate) {
+  const Vector2 sensor =
+      ekf_slam::compose(filter.pose(), filter.options().laser_pose).translation();
+  const std::vector<int> here = gate.roomsOf(sensor, sensor);
+  std::vector<int> elsewhere;
+  for (const ekf_slam::LandmarkInfo& info : filter.landmarks()) {
+    if (!gate.allows(info.id, here)) elsewhere.push_back(info.id);
+  }
+  EkfSlam in_room = filter;
+  in_room.removeLandmarks(elsewhere);
+  return ekf_slam::associate(in_room, observations, options);
+}
 
 struct StepStats {
   double pos = 0, nees = 0, cross_wall = 0;
@@ -194,6 +228,7 @@ struct StepStats {
 
 struct RunResult {
   long matches = 0, mis = 0, cross_wall = 0;
+  long cross_wall_at_door = 0;  // of those, with the robot's estimate within kAtDoor of a doorway
   int landmarks = 0, duplicates = 0;
   double mean_pos = 0, final_pos = 0;
   long refused = 0;
@@ -236,9 +271,18 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       seen.push_back(s.true_landmark[i]);
     }
     const Vector2 robot = filter.pose().translation();
-    const ekf_slam::AssociationResult result =
-        mode == Mode::kRooms ? ekf_slam::associateInRooms(filter, observations, association, gate)
-                             : ekf_slam::associate(filter, observations, association);
+    ekf_slam::AssociationResult result;
+    switch (mode) {
+      case Mode::kOpen:
+        result = ekf_slam::associate(filter, observations, association);
+        break;
+      case Mode::kRobotRoom:
+        result = associateInRobotRoom(filter, observations, association, gate);
+        break;
+      case Mode::kObservationRoom:
+        result = ekf_slam::associateInRooms(filter, observations, association, gate);
+        break;
+    }
     const std::vector<ekf_slam::PointMatch> matches = result.matches();
     for (const ekf_slam::PointMatch& m : matches) {
       const int a = seen[m.observation], b = feature_of.at(m.landmark_id);
@@ -247,6 +291,12 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       ++run->mis;
       if (shareRoom(truth[a], truth[b])) continue;
       ++run->cross_wall;
+      for (const ekf_slam::Doorway& door : gate.doorways()) {
+        if ((robot - door.centre()).norm() <= kAtDoor) {
+          ++run->cross_wall_at_door;
+          break;
+        }
+      }
       if (map_out) {
         *map_out << "cross " << k << ' ' << a << ' ' << b << ' ' << robot.x() << ' ' << robot.y()
                  << '\n';
@@ -377,12 +427,13 @@ int main(int argc, char** argv) {
   std::ofstream summary(dir + "summary.txt");
   summary << "# mode runs steps mean_pos_err_m final_pos_err_m average_nees band_lower band_upper "
              "matches_per_run mis_per_run cross_wall_per_run cross_wall_total "
-             "runs_with_cross_wall landmarks_per_run duplicates_per_run refused\n";
+             "cross_wall_at_door_total runs_with_cross_wall landmarks_per_run "
+             "duplicates_per_run refused\n";
   std::ofstream per_run(dir + "runs.txt");
   per_run << "# mode seed matches mis_associations cross_wall landmarks duplicates "
              "mean_pos_err_m final_pos_err_m\n";
   const double dt = ekf_slam::sim::LandmarkSimOptions().dt;
-  for (Mode mode : {Mode::kOpen, Mode::kRooms}) {
+  for (Mode mode : {Mode::kOpen, Mode::kRobotRoom, Mode::kObservationRoom}) {
     const std::string name = modeName(mode);
     std::vector<StepStats> stats;
     std::ofstream path(dir + name + "_path.txt");
@@ -403,6 +454,7 @@ int main(int argc, char** argv) {
       total.matches += run.matches;
       total.mis += run.mis;
       total.cross_wall += run.cross_wall;
+      total.cross_wall_at_door += run.cross_wall_at_door;
       total.landmarks += run.landmarks;
       total.duplicates += run.duplicates;
       total.refused += run.refused;
@@ -424,11 +476,12 @@ int main(int argc, char** argv) {
     const size_t steps = stats.size();
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s %d %zu %.4f %.4f %.3f %.3f %.3f %.1f %.2f %.2f %ld %d %.2f %.2f %ld\n",
+                  "%s %d %zu %.4f %.4f %.3f %.3f %.3f %.1f %.2f %.2f %ld %ld %d %.2f %.2f %ld\n",
                   name.c_str(), runs, steps, pos_total / steps, final_pos / runs,
                   nees_total / (steps - 1), band.lower, band.upper,
                   static_cast<double>(total.matches) / runs, static_cast<double>(total.mis) / runs,
-                  static_cast<double>(total.cross_wall) / runs, total.cross_wall, runs_with_cross,
+                  static_cast<double>(total.cross_wall) / runs, total.cross_wall,
+                  total.cross_wall_at_door, runs_with_cross,
                   static_cast<double>(total.landmarks) / runs,
                   static_cast<double>(total.duplicates) / runs, total.refused);
     summary << line;
