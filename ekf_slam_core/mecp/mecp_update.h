@@ -19,15 +19,23 @@
 // across-range standard deviation.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "ekf_slam_core/filter/ekf_slam.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 
 namespace ekf_slam {
 
 struct MecpUpdateOptions {
   // rad: sqrt(S_φφ) beyond this skips the update (0.2: ρ >= 5σ).
   double max_bearing_sigma = 0.2;
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("max_bearing_sigma", max_bearing_sigma, Bounds::openClosed(0.0, kPi, "rad"));
+  }
+  std::string validate() const { return checkFields(*this); }  // empty when valid
 };
 
 enum class MecpOutcome {

@@ -152,5 +152,12 @@ TEST(MecpUpdate, ACentreAtTheLaserIsSkipped) {
   EXPECT_EQ(filter.state(), x0);
 }
 
+TEST(MecpUpdateOptions, ANonPositiveBearingLimitIsRefusedByName) {
+  EXPECT_EQ(MecpUpdateOptions().validate(), "");
+  MecpUpdateOptions options;
+  options.max_bearing_sigma = 0.0;
+  EXPECT_NE(options.validate().find("max_bearing_sigma"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ekf_slam

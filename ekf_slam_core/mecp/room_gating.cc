@@ -1,6 +1,7 @@
 #include "ekf_slam_core/mecp/room_gating.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <map>
 #include <utility>
@@ -31,6 +32,7 @@ bool shareOne(const std::vector<int>& a, const std::vector<int>& b) {
 
 RoomGate::RoomGate(RoomMap rooms, std::vector<Doorway> doorways, const RoomGateOptions& options)
     : rooms_(std::move(rooms)), doorways_(std::move(doorways)), options_(options) {
+  assert(options_.validate().empty());
   for (const Doorway& door : doorways_) {
     const Vector2 along = (door.end_b - door.end_a).normalized();
     const Vector2 normal(-along.y(), along.x());

@@ -22,11 +22,13 @@
 // at every scan.
 #pragma once
 
+#include <string>
 #include <unordered_map>
 #include <vector>
 
 #include "ekf_slam_core/filter/data_association.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/mecp/doorways.h"
 
 namespace ekf_slam {
@@ -34,6 +36,13 @@ namespace ekf_slam {
 struct RoomGateOptions {
   double jamb_radius = 0.3;     // m: a point this close to a doorway's end borders both rooms
   double doorway_radius = 0.8;  // m: a sensor this close to a doorway's centre stands in it
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.number("jamb_radius", jamb_radius, Bounds::atLeast(0.0, "m"));
+    v.number("doorway_radius", doorway_radius, Bounds::atLeast(0.0, "m"));
+  }
+  std::string validate() const { return checkFields(*this); }  // empty when valid
 };
 
 class RoomGate {

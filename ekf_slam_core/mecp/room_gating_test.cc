@@ -116,5 +116,12 @@ TEST(RoomGate, ALandmarkInAnotherRoomIsNeverACandidate) {
   EXPECT_EQ(filter.landmarkCount(), 3);
 }
 
+TEST(RoomGateOptions, ANegativeRadiusIsRefusedByName) {
+  EXPECT_EQ(RoomGateOptions().validate(), "");
+  RoomGateOptions options;
+  options.doorway_radius = -0.1;
+  EXPECT_NE(options.validate().find("doorway_radius"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ekf_slam
