@@ -7,7 +7,8 @@ usage: tools/analysis/plot_rooms_experiment.py DIR
 Reads DIR/summary.txt, DIR/runs.txt, DIR/world.txt and per mode M
 DIR/M.txt, DIR/M_path.txt, DIR/M_map.txt. Writes DIR/rooms_experiment.png
 (run 0 of each mode: walls, true features, the map's landmarks with their
-3-sigma ellipses, the estimated path and every cross-wall match),
+3-sigma ellipses, the estimated path and the features paired across a
+wall),
 DIR/rooms_errors.png (position error, pose NEES and cross-wall matches over
 time, means over the runs) and DIR/rooms_table.md (the summary as a
 Markdown table, with paired differences between the modes).
@@ -81,11 +82,14 @@ def plot_maps(directory, modes, out_path):
                                  fill=False, color="tab:blue", linewidth=0.7, zorder=3))
         ax.scatter(lms[:, 2], lms[:, 3], marker="+", color="tab:red", s=30, zorder=4,
                    label="landmarks (3σ ellipses)")
+        # The features paired across a wall lie centimetres apart: ringed,
+        # so that they show at this scale.
         crosses = m.get("cross", [])
-        for i, (_step, seen, of_landmark, _x, _y) in enumerate(crosses):
-            a, b = features[int(seen)], features[int(of_landmark)]
-            ax.plot([a[0], b[0]], [a[1], b[1]], color="magenta", linewidth=2.5, zorder=5,
-                    label="cross-wall match" if i == 0 else None)
+        paired = sorted({int(f) for row in crosses for f in row[1:3]})
+        if paired:
+            ax.scatter(features[paired, 0], features[paired, 1], s=160, facecolors="none",
+                       edgecolors="magenta", linewidths=1.5, zorder=5,
+                       label="paired across a wall")
         ax.set_title("%s, run 0: %d cross-wall matches, %d landmarks" % (
             TITLE.get(mode, mode), len(crosses), len(lms)))
         ax.set_aspect("equal")
@@ -93,7 +97,7 @@ def plot_maps(directory, modes, out_path):
         ax.set_ylabel("y (m)")
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
-    fig.savefig(out_path, dpi=100)
+    fig.savefig(out_path, dpi=100, bbox_inches="tight")  # the legends sit outside the axes
     print("wrote %s" % out_path)
 
 
