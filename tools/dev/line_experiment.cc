@@ -60,9 +60,9 @@
 //                 p from the estimated end points, nan without them)
 // and runs.txt (per variant and seed: mean_pos_err_m final_pos_err_m
 // mean_point_err_m), mecp.txt (per MECP variant: how many scans gave an
-// update, how many were skipped and why, the MECP innovations' mean NIS), world.txt (the walls
-// "wall x1 y1 x2 y2" and points "point x y") and summary.txt (one line per variant; columns named
-// in its header).
+// update, how many were skipped and why, the MECP innovations' mean NIS),
+// world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and
+// summary.txt (one line per variant; columns named in its header).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>

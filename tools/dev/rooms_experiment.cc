@@ -101,7 +101,6 @@ constexpr double kSightMargin = 1e-3;  // m: a sight line may end on the wall it
 // with the pose's heading error); past the barrier it would be labelled
 // with the space behind the wall. 0.25 m is about five σ.
 constexpr double kWallInflation = 0.25;
-constexpr double kAtDoor = 0.8;  // m from a doorway's centre: the robot stands in it
 
 struct Feature {
   Vector2 position;
@@ -228,7 +227,9 @@ struct StepStats {
 
 struct RunResult {
   long matches = 0, mis = 0, cross_wall = 0;
-  long cross_wall_at_door = 0;  // of those, with the robot's estimate within kAtDoor of a doorway
+  // Of those, with the robot's estimate in a doorway (within the gate's
+  // doorway_radius of its centre).
+  long cross_wall_at_door = 0;
   int landmarks = 0, duplicates = 0;
   double mean_pos = 0, final_pos = 0;
   long refused = 0;
@@ -292,7 +293,7 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       if (shareRoom(truth[a], truth[b])) continue;
       ++run->cross_wall;
       for (const ekf_slam::Doorway& door : gate.doorways()) {
-        if ((robot - door.centre()).norm() <= kAtDoor) {
+        if ((robot - door.centre()).norm() <= ekf_slam::RoomGateOptions().doorway_radius) {
           ++run->cross_wall_at_door;
           break;
         }
