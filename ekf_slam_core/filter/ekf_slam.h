@@ -112,6 +112,18 @@ struct PointMatch {
   int landmark_id = -1;
 };
 
+// An observation z = h(x_r, m_a, m_b, …) of dimension d, linearised by
+// the caller at the current estimate: the filter applies the EKF update
+// with H = [J_z_pose, 0 …, J_z_landmarks[0] at m_a's columns, …] and
+// innovation ν = z − h(x̂) (angles already wrapped by the caller).
+struct GenericObservation {
+  Eigen::VectorXd innovation;                  // d
+  Eigen::MatrixXd J_z_pose;                    // d × kPoseDim
+  std::vector<int> landmark_ids;               // each at most once
+  std::vector<Eigen::MatrixXd> J_z_landmarks;  // d × landmarkDim(kind), one per id
+  Eigen::MatrixXd noise;                       // d × d, symmetric, the observation's R
+};
+
 class EkfSlam {
  public:
   static constexpr int kPoseDim = 3;
@@ -165,6 +177,14 @@ class EkfSlam {
   // robot's rows.
   FilterStatus augmentLine(const LineObservation& observation, LandmarkKind kind,
                            int* new_id = nullptr);
+  // Update with one linearised observation of the pose and some landmarks
+  // that no other entry point models, e.g. the centre of an MECP's members
+  // (thesis §4.4.3). Defined in generic_update.cc; see GenericObservation.
+  // Checked before the state is touched: kUnknownLandmark for a missing
+  // id, kBadObservation for a repeated id or mismatched sizes,
+  // kNonFiniteInput, kSingularInnovation when S is not positive definite.
+  // `nis` (if given) receives νᵀ S⁻¹ ν.
+  FilterStatus updateGeneric(const GenericObservation& observation, double* nis = nullptr);
   // The line landmark in `slot` (kLine) or its direction (kLineAngle).
   PolarLine lineLandmark(int slot) const;
   double lineAngle(int slot) const { return x_(landmarkIndex(slot)); }

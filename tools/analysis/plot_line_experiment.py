@@ -27,6 +27,8 @@ STYLE = {
     "ptheta_lines": ("tab:green", "points + (p, θ) lines"),
     "theta_lines": ("tab:blue", "points + θ lines (ends as points)"),
     "theta_lines_no_ends": ("tab:gray", "points + θ lines, no ends"),
+    "points_360": ("tab:orange", "points, 360°"),
+    "points_mecp_360": ("tab:purple", "points + MECP, 360°"),
 }
 
 
@@ -152,7 +154,8 @@ def plot_maps(directory, variants, out_path):
 def compare(runs, out_path):
     pairs = [("ptheta_lines", "points"), ("theta_lines", "points"),
              ("theta_lines", "ptheta_lines"), ("theta_lines_no_ends", "ptheta_lines"),
-             ("theta_lines", "theta_lines_no_ends")]
+             ("theta_lines", "theta_lines_no_ends"), ("points_mecp_360", "points_360"),
+             ("points_360", "points")]
     columns = ["mean_pos_err", "final_pos_err", "mean_point_err"]
     lines = ["# paired over seeds: mean of (a - b) ± its standard error (m); "
              "a better in k of n runs"]

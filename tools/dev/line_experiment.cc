@@ -9,6 +9,15 @@
 //                          offset from the wall's end points when they are
 //                          in the state (thesis eqs. 4.35, 4.38)
 //   theta_lines_no_ends    points + θ-only lines, the end points never used
+//   points_360             points alone, seen all round (two lasers, §4.4)
+//   points_mecp_360        points seen all round + the MECP: after each
+//                          scan's point updates, the maximum empty convex
+//                          polygon of the matched points around the robot
+//                          updates the filter once more as the mean of its
+//                          member landmarks (thesis §4.4.3; not added to
+//                          the state; mecp/mecp_update.h)
+// The MECP needs points on every side of the robot, which a 180° laser
+// does not give (the thesis assumes two lasers), hence its own baseline.
 //
 // The world (map frame centred on the room, m):
 //   outer walls  the square (±11, ±11);
@@ -19,7 +28,8 @@
 //                14 free-standing posts;
 //   path         (-8,-8) (8,-8) (8,8) (-8,8) (-8,-3) (3,-3) (3,3) (-3,3)
 //                (-3,-8) and back to (-8,-8): about 98 m, one lap.
-// Sensing: a 7 m range and a 180° field of view for points and walls alike;
+// Sensing: a 7 m range and a 180° field of view (360° for the _360
+// variants) for points and walls alike;
 // a wall is seen when the part of it inside range and field of view is at
 // least 1 m long. Nothing occludes anything (the thesis's Player/Stage run
 // did have occlusion: points behind walls are seen here).
@@ -49,7 +59,9 @@
 //                 "line i theta_true p_true theta_est p_est" (θ-only lines:
 //                 p from the estimated end points, nan without them)
 // and runs.txt (per variant and seed: mean_pos_err_m final_pos_err_m
-// mean_point_err_m), world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and
+// mean_point_err_m), mecp.txt (per MECP variant: how many scans gave an
+// update, how many were skipped and why, the MECP innovations' mean NIS),
+// world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and
 // summary.txt (one line per variant; columns named in its header).
 #include <Eigen/Core>
 #include <algorithm>
@@ -65,6 +77,7 @@
 
 #include "ekf_slam_core/filter/chi_square.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
+#include "ekf_slam_core/mecp/mecp_update.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
 
 namespace {
@@ -182,9 +195,22 @@ double visibleLength(const Pose2& sensor, const Vector2& a, const Vector2& b) {
   return hi > lo ? (hi - lo) * std::sqrt(qa) : 0.0;
 }
 
-enum class Variant { kPoints, kPThetaLines, kThetaLines, kThetaLinesNoEnds };
-const Variant kVariants[] = {Variant::kPoints, Variant::kPThetaLines, Variant::kThetaLines,
-                             Variant::kThetaLinesNoEnds};
+enum class Variant {
+  kPoints,
+  kPThetaLines,
+  kThetaLines,
+  kThetaLinesNoEnds,
+  kPoints360,
+  kPointsMecp360
+};
+const Variant kVariants[] = {Variant::kPoints,     Variant::kPThetaLines,
+                             Variant::kThetaLines, Variant::kThetaLinesNoEnds,
+                             Variant::kPoints360,  Variant::kPointsMecp360};
+
+bool usesMecp(Variant v) { return v == Variant::kPointsMecp360; }
+double fieldOfView(Variant v) {
+  return v == Variant::kPoints360 || v == Variant::kPointsMecp360 ? 2.0 * kPi : kFieldOfView;
+}
 
 const char* variantName(Variant v) {
   switch (v) {
@@ -196,6 +222,10 @@ const char* variantName(Variant v) {
       return "theta_lines";
     case Variant::kThetaLinesNoEnds:
       return "theta_lines_no_ends";
+    case Variant::kPoints360:
+      return "points_360";
+    case Variant::kPointsMecp360:
+      return "points_mecp_360";
   }
   return "unknown";
 }
@@ -220,6 +250,12 @@ struct RunSummary {
 
 struct Refusals {
   long points = 0, lines = 0, augment = 0, predict = 0;
+};
+
+// What the MECP update did, over all scans of all runs.
+struct MecpCounts {
+  long applied = 0, no_polygon = 0, near_centre = 0, refused = 0;
+  double nis_sum = 0;
 };
 
 // Estimated offset of a line landmark: kLine its own p; kLineAngle the
@@ -247,13 +283,14 @@ double offsetError(double theta_est, double p_est, const PolarLine& truth) {
 }
 
 void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<StepStats>* stats,
-             RunLog* log, RunSummary* run, Refusals* refusals, std::ofstream* map_out) {
+             RunLog* log, RunSummary* run, Refusals* refusals, MecpCounts* mecp,
+             std::ofstream* map_out) {
   ekf_slam::sim::LandmarkSimOptions sim_options;
   sim_options.seed = seed;
   sim_options.landmarks = points();
   sim_options.waypoints = waypoints();
   sim_options.max_range = kMaxRange;
-  sim_options.field_of_view = kFieldOfView;
+  sim_options.field_of_view = fieldOfView(variant);
   ekf_slam::MotionNoiseOptions& noise = sim_options.odometry_noise;
   for (double* variance :
        {&noise.rot_per_rot, &noise.rot_per_trans, &noise.trans_per_trans, &noise.trans_per_rot}) {
@@ -267,7 +304,8 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
   options.tentative_max_age = 0;  // known association: no landmark is spurious
   EkfSlam filter(options, sim.current().true_pose);
 
-  const bool use_lines = variant != Variant::kPoints;
+  const bool use_lines = variant == Variant::kPThetaLines || variant == Variant::kThetaLines ||
+                         variant == Variant::kThetaLinesNoEnds;
   const LandmarkKind line_kind =
       variant == Variant::kPThetaLines ? LandmarkKind::kLine : LandmarkKind::kLineAngle;
   std::mt19937 line_rng(seed * 104729u + 17u);
@@ -294,6 +332,28 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
     for (int i : fresh) {
       if (filter.augment(s.observations[i], &point_id[s.true_landmark[i]]) != FilterStatus::kOk) {
         ++refusals->augment;
+      }
+    }
+    if (usesMecp(variant)) {
+      // Every reading is a landmark by now (matched, or just added).
+      std::vector<int> ids;
+      for (int feature : s.true_landmark) ids.push_back(point_id[feature]);
+      const ekf_slam::MecpUpdateResult result =
+          ekf_slam::updateWithMecp(&filter, s.observations, ids);
+      switch (result.outcome) {
+        case ekf_slam::MecpOutcome::kApplied:
+          ++mecp->applied;
+          mecp->nis_sum += result.nis;
+          break;
+        case ekf_slam::MecpOutcome::kNoPolygon:
+          ++mecp->no_polygon;
+          break;
+        case ekf_slam::MecpOutcome::kNearCentre:
+          ++mecp->near_centre;
+          break;
+        case ekf_slam::MecpOutcome::kFilterRefused:
+          ++mecp->refused;
+          break;
       }
     }
     if (!use_lines) return;
@@ -479,6 +539,9 @@ int main(int argc, char** argv) {
              "final_heading_err_rad average_nees band_lower band_upper steps_inside_band "
              "consistent mean_point_err_m final_point_err_m final_line_angle_err_rad "
              "refused_updates\n";
+  std::ofstream mecp_out(dir + "mecp.txt");
+  mecp_out << "# variant scans_applied scans_no_polygon scans_near_centre scans_refused "
+              "mean_nis_applied\n";
   std::ofstream per_run(dir + "runs.txt");
   per_run << "# variant seed mean_pos_err_m final_pos_err_m mean_point_err_m\n";
   const double dt = ekf_slam::sim::LandmarkSimOptions().dt;
@@ -486,15 +549,21 @@ int main(int argc, char** argv) {
     const std::string name = variantName(variant);
     std::vector<StepStats> stats;
     Refusals refusals;
+    MecpCounts mecp;
     RunLog log;
     std::ofstream map_out(dir + name + "_map.txt");
     map_out << "# point i x_true y_true x_est y_est | line i theta_true p_true theta_est p_est\n";
     for (int r = 0; r < runs; ++r) {
       RunSummary run;
       runOnce(variant, first_seed + r, noise_scale, &stats, r == 0 ? &log : nullptr, &run,
-              &refusals, r == 0 ? &map_out : nullptr);
+              &refusals, &mecp, r == 0 ? &map_out : nullptr);
       per_run << name << ' ' << first_seed + r << ' ' << run.mean_pos << ' ' << run.final_pos << ' '
               << run.mean_point << '\n';
+    }
+    if (usesMecp(variant)) {
+      mecp_out << name << ' ' << mecp.applied << ' ' << mecp.no_polygon << ' ' << mecp.near_centre
+               << ' ' << mecp.refused << ' ' << ratio(mecp.nis_sum, static_cast<int>(mecp.applied))
+               << '\n';
     }
     std::ofstream path(dir + name + "_path.txt");
     path << "# step x_true y_true x_est y_est (run 0)\n";
