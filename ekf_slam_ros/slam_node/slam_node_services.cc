@@ -34,12 +34,12 @@ std::string gridPathFor(const std::string& landmark_path) {
          "_grid.yaml";
 }
 
-// "12 landmarks (3 lines, 2 line angles)", for the services' replies.
+// "12 landmarks (lines: 3, line angles: 2)", for the services' replies.
 std::string landmarkCounts(const LandmarkMapFile& map) {
   std::string text = std::to_string(map.size()) + " landmarks";
   if (!map.lines.empty() || !map.line_angles.empty()) {
-    text += " (" + std::to_string(map.lines.size()) + " lines, " +
-            std::to_string(map.line_angles.size()) + " line angles)";
+    text += " (lines: " + std::to_string(map.lines.size()) +
+            ", line angles: " + std::to_string(map.line_angles.size()) + ")";
   }
   return text;
 }
