@@ -143,10 +143,13 @@ std::string parseCovariance(const Fields& fields, double max_first, double max_s
   return "";
 }
 
-const std::string kCoordinateBound = std::to_string(static_cast<long>(kMaxLandmarkCoordinate));
-const std::string kVarianceBound = std::to_string(static_cast<long>(kMaxLandmarkVariance)) +
-                                   " m^2 (a landmark known to no better than a kilometre)";
-const std::string kAngleVarianceBound = "pi^2 rad^2 (a direction not known at all)";
+// The bounds as the errors name them.
+std::string coordinateBound() { return std::to_string(static_cast<long>(kMaxLandmarkCoordinate)); }
+std::string varianceBound() {
+  return std::to_string(static_cast<long>(kMaxLandmarkVariance)) +
+         " m^2 (a landmark known to no better than a kilometre)";
+}
+constexpr char kAngleVarianceBound[] = "pi^2 rad^2 (a direction not known at all)";
 
 // One point "- {id: .., x: .., ...}" entry; empty string or the problem.
 std::string parsePoint(const std::string& body, LandmarkRecord* out) {
@@ -158,6 +161,7 @@ std::string parsePoint(const std::string& body, LandmarkRecord* out) {
   if (!parseId(fields["id"], false, &r.id)) {
     return "id must be a non-negative integer, got '" + fields["id"] + "'";
   }
+  // Every check runs (in order); the first problem is the one reported.
   for (const auto& step :
        {parseFinite(fields, "x", &r.position.x()), parseFinite(fields, "y", &r.position.y()),
         parseObservations(fields, &r.observations)}) {
@@ -165,9 +169,9 @@ std::string parsePoint(const std::string& body, LandmarkRecord* out) {
   }
   if (std::abs(r.position.x()) > kMaxLandmarkCoordinate ||
       std::abs(r.position.y()) > kMaxLandmarkCoordinate) {
-    return "position beyond " + kCoordinateBound + " m from the origin";
+    return "position beyond " + coordinateBound() + " m from the origin";
   }
-  problem = parseCovariance(fields, kMaxLandmarkVariance, kMaxLandmarkVariance, kVarianceBound,
+  problem = parseCovariance(fields, kMaxLandmarkVariance, kMaxLandmarkVariance, varianceBound(),
                             &r.covariance);
   if (!problem.empty()) return problem;
   *out = r;
@@ -190,9 +194,9 @@ std::string parseLine(const std::string& body, LineLandmarkRecord* out) {
     if (!step.empty()) return step;
   }
   if (r.p < 0.0) return "p must be >= 0 (the normal form), got '" + fields["p"] + "'";
-  if (r.p > kMaxLandmarkCoordinate) return "p beyond " + kCoordinateBound + " m";
+  if (r.p > kMaxLandmarkCoordinate) return "p beyond " + coordinateBound() + " m";
   problem = parseCovariance(fields, kMaxLandmarkVariance, kMaxLandmarkAngleVariance,
-                            kVarianceBound + " or " + kAngleVarianceBound, &r.covariance);
+                            varianceBound() + " or " + kAngleVarianceBound, &r.covariance);
   if (!problem.empty()) return problem;
   if (fields.count("extent")) {
     std::vector<double> extent;
@@ -202,7 +206,7 @@ std::string parseLine(const std::string& body, LineLandmarkRecord* out) {
     if (!(extent[0] <= extent[1])) return "extent has s_min > s_max";
     if (std::abs(extent[0]) > kMaxLandmarkCoordinate ||
         std::abs(extent[1]) > kMaxLandmarkCoordinate) {
-      return "extent beyond " + kCoordinateBound + " m";
+      return "extent beyond " + coordinateBound() + " m";
     }
     r.has_extent = true;
     r.s_min = extent[0];
@@ -229,7 +233,8 @@ std::string parseLineAngle(const std::string& body, LineAngleRecord* out) {
     if (!step.empty()) return step;
   }
   if (!(r.variance > 0.0)) return "variance must be positive, got '" + fields["variance"] + "'";
-  if (r.variance > kMaxLandmarkAngleVariance) return "variance beyond " + kAngleVarianceBound;
+  if (r.variance > kMaxLandmarkAngleVariance)
+    return std::string("variance beyond ") + kAngleVarianceBound;
   if (fields.count("endpoints")) {
     const std::string& list = fields["endpoints"];
     std::vector<std::string> items;
