@@ -369,6 +369,54 @@ FilterStatus EkfSlam::addLandmark(int id, const Vector2& position, const Matrix2
   return FilterStatus::kOk;
 }
 
+FilterStatus EkfSlam::addLineLandmark(int id, const PolarLine& line, const Matrix2& covariance,
+                                      int observations) {
+  if (!line.allFinite() || !covariance.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(covariance)) return FilterStatus::kSingularInnovation;
+  // The same guards as for a point (their causes are the units' own), plus
+  // θ: beyond σ = π the direction is unknown and the linearisation meaningless.
+  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(0.5 * (covariance + covariance.transpose()),
+                                                     Eigen::EigenvaluesOnly);
+  if (eigen.eigenvalues()(1) > kMaxPriorVariance ||
+      eigen.eigenvalues()(0) < kMinPriorEigenvalueRatio * eigen.eigenvalues()(1) ||
+      covariance(1, 1) > kMaxPriorAngleVariance) {
+    return FilterStatus::kUnrepresentablePrior;
+  }
+  if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
+  Vector2 mean(line.p, wrapAngle(line.theta));
+  Matrix2 C = 0.5 * (covariance + covariance.transpose());
+  if (line.p < 0.0) {
+    mean = Vector2(-line.p, wrapAngle(line.theta + kPi));
+    C(0, 1) = -C(0, 1);
+    C(1, 0) = -C(1, 0);
+  }
+  const int n = dim_;
+  reserve(n + 2);
+  // Uncorrelated with the pose and the other landmarks, as a point prior.
+  x_.segment<2>(n) = mean;
+  P_.block(n, 0, 2, n).setZero();
+  P_.block(0, n, n, 2).setZero();
+  P_.block<2, 2>(n, n) = C;
+  appendLandmark(LandmarkKind::kLine, id, observations, mean);
+  return FilterStatus::kOk;
+}
+
+FilterStatus EkfSlam::addLineAngleLandmark(int id, double theta, double variance,
+                                           int observations) {
+  if (!std::isfinite(theta) || !std::isfinite(variance)) return FilterStatus::kNonFiniteInput;
+  if (!(variance > 0.0)) return FilterStatus::kSingularInnovation;
+  if (variance > kMaxPriorAngleVariance) return FilterStatus::kUnrepresentablePrior;
+  if (id < 0 || slotOf(id) >= 0) return FilterStatus::kDuplicateLandmark;
+  const int n = dim_;
+  reserve(n + 1);
+  x_(n) = wrapAngle(theta);
+  P_.block(n, 0, 1, n).setZero();
+  P_.block(0, n, n, 1).setZero();
+  P_(n, n) = variance;
+  appendLandmark(LandmarkKind::kLineAngle, id, observations, Vector2(0.0, x_(n)));
+  return FilterStatus::kOk;
+}
+
 int EkfSlam::pruneTentative() {
   if (options_.tentative_max_age <= 0) return 0;
   std::vector<int> slots;

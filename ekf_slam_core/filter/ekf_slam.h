@@ -227,6 +227,18 @@ class EkfSlam {
   static constexpr double kMinPriorEigenvalueRatio = 1e-12;
   FilterStatus addLandmark(int id, const Vector2& position, const Matrix2& covariance,
                            int observations = 2);
+  // The same for a (p, θ) line landmark, covariance of (p, θ) (m², m·rad,
+  // rad²). A line given with p < 0 is stored in normal form, (−p, θ + π)
+  // with the p row and column of its covariance negated (the same line);
+  // θ is wrapped. Refused as addLandmark, and with kUnrepresentablePrior
+  // also when the variance of θ exceeds kMaxPriorAngleVariance.
+  static constexpr double kMaxPriorAngleVariance = kPi * kPi;  // rad² (σ = π)
+  FilterStatus addLineLandmark(int id, const PolarLine& line, const Matrix2& covariance,
+                               int observations = 2);
+  // A θ-only line landmark: the normal's direction θ (wrapped) and its
+  // variance (rad², positive, at most kMaxPriorAngleVariance; else
+  // kSingularInnovation or kUnrepresentablePrior).
+  FilterStatus addLineAngleLandmark(int id, double theta, double variance, int observations = 2);
 
   // Localisation only when false: augment() refuses (kMappingDisabled), so
   // the map keeps its landmarks and gains none. On by default.
@@ -238,10 +250,13 @@ class EkfSlam {
   int landmarkCount() const { return static_cast<int>(landmarks_.size()); }
   int stateDim() const { return dim_; }
   int slotOf(int id) const;  // -1 when no landmark has this id
+  // Of a point landmark, or a (p, θ) line's (p, θ) and its 2 × 2 block.
   Vector2 landmarkPosition(int slot) const { return x_.segment<2>(landmarkIndex(slot)); }
   Matrix2 landmarkCovariance(int slot) const {
     return P_.block<2, 2>(landmarkIndex(slot), landmarkIndex(slot));
   }
+  // Of a θ-only line landmark's direction (rad²).
+  double lineAngleVariance(int slot) const { return P_(landmarkIndex(slot), landmarkIndex(slot)); }
   const std::vector<LandmarkInfo>& landmarks() const { return landmarks_; }
   // Cross-covariance of two landmarks' positions (P_ab, 2 × 2).
   Matrix2 landmarkCrossCovariance(int slot_a, int slot_b) const;

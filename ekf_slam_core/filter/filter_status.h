@@ -13,8 +13,8 @@ enum class FilterStatus {
   kUnknownLandmark,       // an association names a landmark not in the state
   kBadObservation,        // e.g. a landmark at the sensor origin
   kMappingDisabled,       // augment refused: the filter localises only (setMappingEnabled)
-  kDuplicateLandmark,     // addLandmark with an id already in the map
-  kUnrepresentablePrior,  // addLandmark: variance beyond kMaxPriorVariance, or nearly singular
+  kDuplicateLandmark,     // add*Landmark with an id already in the map
+  kUnrepresentablePrior,  // add*Landmark: variance beyond kMaxPriorVariance, or nearly singular
 };
 
 const char* toString(FilterStatus status);

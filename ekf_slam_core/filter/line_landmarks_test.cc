@@ -322,6 +322,84 @@ TEST(LineLandmarks, RemovalAndReanchoringHandleEveryKind) {
   EXPECT_TRUE(isSymmetricPositiveDefinite(moved.filter.covariance()));
 }
 
+// Line landmarks from a prior map (a saved one): kept as given, in normal
+// form, with no correlation to the pose or the other landmarks, and
+// corrected by the observations that follow.
+TEST(LineLandmarks, PriorLinesKeepTheirIdsMeansAndCovariancesUncorrelated) {
+  sim::LandmarkSimOptions sim_options;
+  EkfSlam filter(optionsFor(sim_options), Pose2(1.0, 0.5, 0.2), Matrix3::Identity() * 1e-3);
+  Matrix2 line_covariance;
+  line_covariance << 4e-4, 1e-5, 1e-5, 1e-4;
+  ASSERT_EQ(filter.addLandmark(4, Vector2(2.0, 1.0), Matrix2::Identity() * 1e-3),
+            FilterStatus::kOk);
+  ASSERT_EQ(filter.addLineLandmark(7, PolarLine{13.0, 0.0}, line_covariance, 5), FilterStatus::kOk);
+  ASSERT_EQ(filter.addLineAngleLandmark(9, 0.5 * kPi, 2e-4, 3), FilterStatus::kOk);
+  ASSERT_EQ(filter.stateDim(), 3 + 2 + 2 + 1);
+  const int line = filter.slotOf(7), angle = filter.slotOf(9);
+  EXPECT_EQ(filter.landmarkKind(line), LandmarkKind::kLine);
+  EXPECT_EQ(filter.landmarkKind(angle), LandmarkKind::kLineAngle);
+  EXPECT_EQ(filter.lineLandmark(line).p, 13.0);
+  EXPECT_EQ(filter.lineLandmark(line).theta, 0.0);
+  EXPECT_EQ(filter.landmarkCovariance(line), line_covariance);
+  EXPECT_EQ(filter.lineAngle(angle), 0.5 * kPi);
+  EXPECT_EQ(filter.lineAngleVariance(angle), 2e-4);
+  EXPECT_EQ(filter.landmarks()[line].observations, 5);
+  EXPECT_EQ(filter.landmarks()[angle].observations, 3);
+  const MatrixXd P = filter.covariance();
+  const int l = filter.landmarkIndex(line), a = filter.landmarkIndex(angle);
+  EXPECT_EQ(P.block(l, 0, 2, l).norm(), 0.0);  // the pose and the point
+  EXPECT_EQ(P.block(a, 0, 1, a).norm(), 0.0);  // the pose, the point and the line
+  EXPECT_TRUE(isSymmetricPositiveDefinite(P));
+
+  // p < 0 is the same line in normal form: (−p, θ + π), the p–θ covariance negated.
+  ASSERT_EQ(filter.addLineLandmark(11, PolarLine{-2.0, 0.3}, line_covariance), FilterStatus::kOk);
+  const PolarLine flipped = filter.lineLandmark(filter.slotOf(11));
+  EXPECT_EQ(flipped.p, 2.0);
+  EXPECT_NEAR(flipped.theta, 0.3 - kPi, 1e-15);
+  Matrix2 flipped_covariance = line_covariance;
+  flipped_covariance(0, 1) = flipped_covariance(1, 0) = -line_covariance(0, 1);
+  EXPECT_EQ(filter.landmarkCovariance(filter.slotOf(11)), flipped_covariance);
+  ASSERT_EQ(filter.addLineAngleLandmark(12, 4.0, 1e-4), FilterStatus::kOk);
+  EXPECT_NEAR(filter.lineAngle(filter.slotOf(12)), 4.0 - 2.0 * kPi, 1e-15);
+
+  // Refusals leave the state alone.
+  const VectorXd x = filter.state();
+  Matrix2 indefinite;
+  indefinite << 1e-4, 1e-3, 1e-3, 1e-4;
+  EXPECT_EQ(filter.addLineLandmark(7, PolarLine{1.0, 0.0}, line_covariance),
+            FilterStatus::kDuplicateLandmark);
+  EXPECT_EQ(filter.addLineAngleLandmark(4, 0.0, 1e-4), FilterStatus::kDuplicateLandmark);
+  EXPECT_EQ(filter.addLineLandmark(20, PolarLine{NAN, 0.0}, line_covariance),
+            FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.addLineLandmark(20, PolarLine{1.0, 0.0}, indefinite),
+            FilterStatus::kSingularInnovation);
+  EXPECT_EQ(filter.addLineLandmark(20, PolarLine{1.0, 0.0}, Matrix2::Identity() * 1e300),
+            FilterStatus::kUnrepresentablePrior);
+  EXPECT_EQ(filter.addLineLandmark(20, PolarLine{1.0, 0.0}, Matrix2::Identity() * 20.0),
+            FilterStatus::kUnrepresentablePrior);  // σ_θ beyond π
+  EXPECT_EQ(filter.addLineAngleLandmark(20, INFINITY, 1e-4), FilterStatus::kNonFiniteInput);
+  EXPECT_EQ(filter.addLineAngleLandmark(20, 0.0, 0.0), FilterStatus::kSingularInnovation);
+  EXPECT_EQ(filter.addLineAngleLandmark(20, 0.0, 20.0), FilterStatus::kUnrepresentablePrior);
+  EXPECT_EQ(filter.state(), x);
+
+  // An observation of the prior wall corrects it and correlates it with the pose.
+  std::mt19937 rng(3);
+  std::vector<LineObservation> z = {
+      noisyWall(filter.pose(), sim_options.laser_pose, roomWalls()[1], &rng),
+      noisyWall(filter.pose(), sim_options.laser_pose, roomWalls()[2], &rng)};
+  LineMatch to_line, to_angle;
+  to_line.observation = 0;
+  to_line.landmark_id = 7;
+  to_angle.observation = 1;
+  to_angle.landmark_id = 9;
+  ASSERT_EQ(filter.updateLines(z, {to_line, to_angle}), FilterStatus::kOk);
+  EXPECT_LT(filter.landmarkCovariance(filter.slotOf(7))(0, 0), line_covariance(0, 0));
+  EXPECT_LT(filter.lineAngleVariance(filter.slotOf(9)), 2e-4);
+  EXPECT_GT(filter.covariance().block(filter.landmarkIndex(filter.slotOf(7)), 0, 2, 3).norm(), 0.0);
+  EXPECT_TRUE(isSymmetricPositiveDefinite(filter.covariance()));
+  EXPECT_EQ(filter.landmarks()[filter.slotOf(7)].observations, 6);
+}
+
 enum class LineVariant { kPTheta, kThetaWithEndpoints, kThetaAlone };
 
 // One run on the landmark simulator in the walled room with known

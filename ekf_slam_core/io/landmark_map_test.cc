@@ -1,5 +1,6 @@
-// Landmark map files: exact round trip, the offline runner's 3-value form,
-// errors that name the line, and seeding a filter from a saved map.
+// Landmark map files: exact round trip of every landmark kind, the older
+// offline runner's 3-value form and version 1 files, errors that name the
+// line, and seeding a filter from a saved map.
 #include "ekf_slam_core/io/landmark_map.h"
 
 #include <gtest/gtest.h>
@@ -35,8 +36,74 @@ LandmarkMapFile randomMap(int count, unsigned seed) {
   return map;
 }
 
+// randomMap's points plus `count` lines of each kind, ids after theirs; the
+// θ-only lines end on the points.
+LandmarkMapFile randomMixedMap(int count, unsigned seed) {
+  LandmarkMapFile map = randomMap(count, seed);
+  std::mt19937 rng(seed + 1);
+  std::uniform_real_distribution<double> offset(0.0, 50.0), angle(-kPi, kPi), scale(1e-6, 0.1);
+  for (int i = 0; i < count; ++i) {
+    LineLandmarkRecord line;
+    line.id = 3 * count + 2 * i;
+    line.p = offset(rng);
+    line.theta = angle(rng);
+    Eigen::Matrix2d a;
+    a << scale(rng), scale(rng), scale(rng), scale(rng);
+    line.covariance = a * a.transpose() + 1e-9 * Matrix2::Identity();
+    line.observations = 2 + i;
+    line.has_extent = i % 2 == 0;  // also lines whose extent is unknown
+    line.s_min = -offset(rng);
+    line.s_max = offset(rng);
+    map.lines.push_back(line);
+    LineAngleRecord direction;
+    direction.id = line.id + 1;
+    direction.theta = angle(rng);
+    direction.variance = scale(rng) * scale(rng) + 1e-12;
+    direction.observations = 1 + i;
+    direction.endpoint_ids[0] = map.landmarks[i].id;
+    direction.endpoint_ids[1] = i % 2 ? map.landmarks[(i + 1) % count].id : -1;
+    map.line_angles.push_back(direction);
+  }
+  return map;
+}
+
+void expectSameMaps(const LandmarkMapFile& read, const LandmarkMapFile& original) {
+  EXPECT_EQ(read.frame, original.frame);
+  ASSERT_EQ(read.landmarks.size(), original.landmarks.size());
+  for (size_t i = 0; i < read.landmarks.size(); ++i) {
+    EXPECT_EQ(read.landmarks[i].id, original.landmarks[i].id);
+    EXPECT_EQ(read.landmarks[i].position, original.landmarks[i].position);  // bit-exact
+    EXPECT_EQ(read.landmarks[i].covariance, original.landmarks[i].covariance);
+    EXPECT_EQ(read.landmarks[i].observations, original.landmarks[i].observations);
+  }
+  ASSERT_EQ(read.lines.size(), original.lines.size());
+  for (size_t i = 0; i < read.lines.size(); ++i) {
+    const LineLandmarkRecord &a = read.lines[i], &b = original.lines[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.p, b.p);
+    EXPECT_EQ(a.theta, b.theta);
+    EXPECT_EQ(a.covariance, b.covariance);
+    EXPECT_EQ(a.observations, b.observations);
+    EXPECT_EQ(a.has_extent, b.has_extent);
+    if (b.has_extent) {
+      EXPECT_EQ(a.s_min, b.s_min);
+      EXPECT_EQ(a.s_max, b.s_max);
+    }
+  }
+  ASSERT_EQ(read.line_angles.size(), original.line_angles.size());
+  for (size_t i = 0; i < read.line_angles.size(); ++i) {
+    const LineAngleRecord &a = read.line_angles[i], &b = original.line_angles[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.theta, b.theta);
+    EXPECT_EQ(a.variance, b.variance);
+    EXPECT_EQ(a.observations, b.observations);
+    EXPECT_EQ(a.endpoint_ids[0], b.endpoint_ids[0]);
+    EXPECT_EQ(a.endpoint_ids[1], b.endpoint_ids[1]);
+  }
+}
+
 TEST(LandmarkMapFile, RoundTripThroughAFileIsExact) {
-  const LandmarkMapFile original = randomMap(40, 7);
+  const LandmarkMapFile original = randomMixedMap(40, 7);
   char path[] = "/tmp/landmark_map_testXXXXXX";
   const int fd = ::mkstemp(path);
   ASSERT_GE(fd, 0);
@@ -45,14 +112,7 @@ TEST(LandmarkMapFile, RoundTripThroughAFileIsExact) {
   LandmarkMapFile read;
   ASSERT_EQ(readLandmarkMap(path, &read), "");
   std::remove(path);
-  EXPECT_EQ(read.frame, "map");
-  ASSERT_EQ(read.landmarks.size(), original.landmarks.size());
-  for (size_t i = 0; i < read.landmarks.size(); ++i) {
-    EXPECT_EQ(read.landmarks[i].id, original.landmarks[i].id);
-    EXPECT_EQ(read.landmarks[i].position, original.landmarks[i].position);  // bit-exact
-    EXPECT_EQ(read.landmarks[i].covariance, original.landmarks[i].covariance);
-    EXPECT_EQ(read.landmarks[i].observations, original.landmarks[i].observations);
-  }
+  expectSameMaps(read, original);
 }
 
 TEST(LandmarkMapFile, EmptyMapRoundTrips) {
@@ -62,6 +122,24 @@ TEST(LandmarkMapFile, EmptyMapRoundTrips) {
   ASSERT_EQ(parseLandmarkMap(formatLandmarkMap(empty), "text", &read), "");
   EXPECT_EQ(read.frame, "world");
   EXPECT_TRUE(read.landmarks.empty());
+  EXPECT_EQ(read.size(), 0u);
+}
+
+// What version 1 wrote (points only) is read as before.
+TEST(LandmarkMapFile, ReadsVersionOneFiles) {
+  const std::string text =
+      "version: 1\nframe: map\ncount: 2\nlandmarks:\n"
+      "  - {id: 3, x: 1.25, y: -0.5, covariance: [0.01, 0.001, 0.001, 0.02], observations: 7}\n"
+      "  - {id: 9, x: -4, y: 25, covariance: [0.04, 0, 0.04]}\n";
+  LandmarkMapFile map;
+  ASSERT_EQ(parseLandmarkMap(text, "v1.yaml", &map), "");
+  ASSERT_EQ(map.landmarks.size(), 2u);
+  EXPECT_EQ(map.landmarks[0].observations, 7);
+  EXPECT_DOUBLE_EQ(map.landmarks[1].covariance(1, 1), 0.04);
+  EXPECT_TRUE(map.lines.empty() && map.line_angles.empty());
+  // Lines were not part of version 1.
+  EXPECT_NE(parseLandmarkMap(text + "lines: []\n", "v1.yaml", &map).find("need 'version: 2'"),
+            std::string::npos);
 }
 
 TEST(LandmarkMapFile, ReadsTheOfflineRunnersThreeValueCovariance) {
@@ -115,6 +193,83 @@ TEST(LandmarkMapFile, ErrorsNameTheLineAndTheProblemAndLeaveTheMapAlone) {
             std::string::npos);
 }
 
+// Every check made on points holds for the line kinds too.
+TEST(LandmarkMapFile, LineErrorsNameTheLineAndTheProblemAndLeaveTheMapAlone) {
+  const std::string head =
+      "version: 2\ncount: 2\n"
+      "landmarks:\n  - {id: 1, x: 0, y: 0, covariance: [1, 0, 0, 1]}\n";
+  const std::string no_angles = "line_angles: []\n", no_lines = "lines: []\n";
+  auto line = [&](const std::string& entry) { return "lines:\n  - " + entry + "\n" + no_angles; };
+  auto angle = [&](const std::string& entry) {
+    return no_lines + "line_angles:\n  - " + entry + "\n";
+  };
+  struct Case {
+    std::string body;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, -1]}"), "not positive definite"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0.5, 0, 1]}"), "not symmetric"},
+      {line("{id: 2, p: inf, theta: 0, covariance: [1, 0, 0, 1]}"), "p must be a finite number"},
+      {line("{id: 2, p: 1, theta: nan, covariance: [1, 0, 0, 1]}"), "theta must be a finite"},
+      {line("{id: 2, p: -1, theta: 0, covariance: [1, 0, 0, 1]}"), "p must be >= 0"},
+      {line("{id: 2, p: 1, theta: 3.5, covariance: [1, 0, 0, 1]}"), "theta must lie in"},
+      {line("{id: 2, p: 2e6, theta: 0, covariance: [1, 0, 0, 1]}"), "p beyond"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1e7, 0, 0, 1]}"), "covariance beyond"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 10]}"), "covariance beyond"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1], extent: [2, 1]}"), "s_min > s_max"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1], extent: [1]}"), "extent needs 2"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1], extent: [0, inf]}"), "finite"},
+      {line("{id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1], extent: [0, 3e6]}"),
+       "extent beyond"},
+      {line("{id: 2, p: 1, covariance: [1, 0, 0, 1]}"), "missing key 'theta'"},
+      {line("{id: 2, p: 1, theta: 0, x: 1, covariance: [1, 0, 0, 1]}"), "unknown key 'x'"},
+      {line("{id: 1, p: 1, theta: 0, covariance: [1, 0, 0, 1]}"), "id 1 appears twice"},
+      {angle("{id: 2, theta: 0, variance: 0}"), "variance must be positive"},
+      {angle("{id: 2, theta: 0, variance: -1e-4}"), "variance must be positive"},
+      {angle("{id: 2, theta: 0, variance: nan}"), "variance must be a finite"},
+      {angle("{id: 2, theta: 0, variance: 10}"), "variance beyond"},
+      {angle("{id: 2, theta: -4, variance: 1e-4}"), "theta must lie in"},
+      {angle("{id: 2, theta: 0, variance: 1e-4, endpoints: [1]}"), "endpoints must be two"},
+      {angle("{id: 2, theta: 0, variance: 1e-4, endpoints: [1, -2]}"), "endpoints must be two"},
+      {angle("{id: 2, theta: 0, variance: 1e-4, endpoints: [1, 1]}"), "point 1 twice"},
+      {angle("{id: 2, theta: 0, variance: 1e-4, endpoints: [1, 7]}"),
+       "endpoint 7 is not a point landmark"},
+      {angle("{id: 1, theta: 0, variance: 1e-4}"), "id 1 appears twice"},
+      {"lines:\n  - {id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1]}\n", "no 'line_angles:'"},
+      {no_lines + no_lines + no_angles, "'lines:' given twice"},
+  };
+  for (const Case& c : cases) {
+    LandmarkMapFile map = randomMixedMap(2, 1);
+    const std::string error = parseLandmarkMap(head + c.body, "bad.yaml", &map);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.body << " → " << error;
+    EXPECT_EQ(error.rfind("bad.yaml:", 0), 0u) << error;
+    EXPECT_EQ(map.size(), 6u);  // untouched
+  }
+  // The endpoint error names the line of the θ-only entry; a line is no endpoint.
+  LandmarkMapFile map;
+  EXPECT_NE(
+      parseLandmarkMap("version: 2\ncount: 2\nlandmarks: []\n"
+                       "lines:\n  - {id: 2, p: 1, theta: 0, covariance: [1, 0, 0, 1]}\n"
+                       "line_angles:\n  - {id: 3, theta: 0, variance: 1, endpoints: [2, -1]}\n",
+                       "f", &map)
+          .find("f:7: endpoint 2 is not a point landmark"),
+      std::string::npos);
+  EXPECT_NE(parseLandmarkMap(head + angle("{id: 2, theta: 0, variance: 1e-4, endpoints: [5, -1]}"),
+                             "f", &map)
+                .find("f:7: endpoint 5"),
+            std::string::npos);
+  // And a valid one loads, the endpoints as given.
+  ASSERT_EQ(
+      parseLandmarkMap(head + angle("{id: 2, theta: 3.14, variance: 1e-4, endpoints: [-1, 1]}"),
+                       "good.yaml", &map),
+      "");
+  ASSERT_EQ(map.line_angles.size(), 1u);
+  EXPECT_EQ(map.line_angles[0].endpoint_ids[0], -1);
+  EXPECT_EQ(map.line_angles[0].endpoint_ids[1], 1);
+  EXPECT_EQ(map.line_angles[0].observations, 2);
+}
+
 std::string fileContents(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream buffer;
@@ -122,10 +277,11 @@ std::string fileContents(const std::string& path) {
   return buffer.str();
 }
 
-// A file cut at any line boundary inside the list is refused: the count in
-// the header says how many landmarks must follow.
+// A file cut at any line boundary inside the lists is refused: the count in
+// the header says how many landmarks must follow, and version 2 names every
+// list, so that even a cut just before an empty list is seen.
 TEST(LandmarkMapFile, AFileCutShortIsRefused) {
-  const std::string text = formatLandmarkMap(randomMap(12, 3));
+  const std::string text = formatLandmarkMap(randomMixedMap(4, 3));
   LandmarkMapFile map;
   ASSERT_EQ(parseLandmarkMap(text, "whole.yaml", &map), "");
   size_t cut = text.find("\nlandmarks:");
@@ -137,7 +293,16 @@ TEST(LandmarkMapFile, AFileCutShortIsRefused) {
     EXPECT_EQ(partial.landmarks.size(), 2u);  // untouched
     ++refused;
   }
-  EXPECT_EQ(refused, 12);  // every cut that keeps 0 … 11 of the 12 landmarks
+  // Every cut from just after 'landmarks:' to just before the last entry:
+  // 'landmarks:', 4 points, 'lines:', 4 lines, 'line_angles:', 3 of its 4.
+  EXPECT_EQ(refused, 1 + 4 + 1 + 4 + 1 + 3);
+
+  const std::string points_only = formatLandmarkMap(randomMap(3, 3));
+  const size_t before_lines = points_only.find("lines: []");
+  ASSERT_NE(before_lines, std::string::npos);
+  EXPECT_NE(
+      parseLandmarkMap(points_only.substr(0, before_lines), "cut.yaml", &map).find("cut short"),
+      std::string::npos);
 }
 
 TEST(LandmarkMapFile, VersionsAndAbsurdValues) {
@@ -147,7 +312,7 @@ TEST(LandmarkMapFile, VersionsAndAbsurdValues) {
                              "  - {id: 1, x: 0, y: 0, covariance: [1, 0, 0, 1]}\n",
                              "old.yaml", &map),
             "");
-  EXPECT_NE(parseLandmarkMap("version: 2\ncount: 0\nlandmarks: []\n", "new.yaml", &map)
+  EXPECT_NE(parseLandmarkMap("version: 3\ncount: 0\nlandmarks: []\n", "new.yaml", &map)
                 .find("newer than this program reads"),
             std::string::npos);
   EXPECT_NE(parseLandmarkMap("version: 1\nlandmarks: []\n", "v1.yaml", &map).find("no 'count:'"),

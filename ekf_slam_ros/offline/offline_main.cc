@@ -41,7 +41,9 @@
 #include <sstream>
 #include <string>
 
+#include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/io/trajectory_file.h"
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_core/pose_graph/graph_io.h"
 #include "ekf_slam_ros/offline/log_input.h"
 
@@ -146,22 +148,6 @@ std::string writeFirstLastScans(const std::string& path, const ekf_slam::LogData
         out << frame << ' ' << names[k] << ' ' << p.x() << ' ' << p.y() << '\n';
       }
     }
-  }
-  return out ? "" : path + ": write error";
-}
-
-std::string writeLandmarks(const std::string& path, const ekf_slam::EkfSlam& filter) {
-  std::ofstream out(path);
-  if (!out) return path + ": cannot write";
-  out.precision(9);
-  out << "# EKF-SLAM point landmarks in the map frame (m); covariance [xx, xy, yy] (m^2)\n"
-         "landmarks:\n";
-  for (int s = 0; s < filter.landmarkCount(); ++s) {
-    const ekf_slam::Vector2 p = filter.landmarkPosition(s);
-    const ekf_slam::Matrix2 c = filter.landmarkCovariance(s);
-    out << "  - {id: " << filter.landmarks()[s].id << ", x: " << p.x() << ", y: " << p.y()
-        << ", covariance: [" << c(0, 0) << ", " << c(0, 1) << ", " << c(1, 1)
-        << "], observations: " << filter.landmarks()[s].observations << "}\n";
   }
   return out ? "" : path + ": write error";
 }
@@ -430,7 +416,12 @@ int main(int argc, char** argv) {
   }
   // The final trajectory: loop-closed when loop closure is on, else smoothed.
   const std::vector<ekf_slam::StampedPose>& final_poses = optimized.empty() ? smoothed : optimized;
-  if (error.empty()) error = writeLandmarks(out_dir + "/landmarks.yaml", pipeline.filter());
+  if (error.empty()) {
+    // The same file as the live node's save_map; the lines' extents and
+    // endpoints join it once the pipeline keeps line support.
+    error = ekf_slam::writeLandmarkMap(out_dir + "/landmarks.yaml",
+                                       ekf_slam::toLandmarkMapFile(pipeline.filter(), {}, "map"));
+  }
   if (error.empty()) {
     error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, final_poses,
                                 config.pipeline.filter.laser_pose);

@@ -3,7 +3,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "ekf_slam_core/filter/chi_square.h"
 #include "ekf_slam_ros/conversions/pose_conversion.h"
@@ -91,6 +93,105 @@ visualization_msgs::Marker ellipseMarker(const std_msgs::Header& header, const s
   m.scale.z = 0.01;
   m.color = c;
   return m;
+}
+
+const std_msgs::ColorRGBA kTentative = colour(0.6f, 0.6f, 0.6f, 0.6f);
+
+visualization_msgs::Marker lineList(const std_msgs::Header& header, const std::string& ns, int id,
+                                    double width, const std_msgs::ColorRGBA& c) {
+  visualization_msgs::Marker m = marker(header, ns, id, visualization_msgs::Marker::LINE_LIST);
+  m.scale.x = width;
+  m.color = c;
+  return m;
+}
+
+void addSegment(const Vector2& a, const Vector2& b, visualization_msgs::Marker* m) {
+  m->points.push_back(point(a.x(), a.y()));
+  m->points.push_back(point(b.x(), b.y()));
+}
+
+// The direction along a line whose normal points at `normal_angle`.
+Vector2 lineDirection(double normal_angle) {
+  return Vector2(-std::sin(normal_angle), std::cos(normal_angle));
+}
+
+// The (p, θ) line in `slot`: its segment and its band (landmarkMarkers'
+// contract); returns where its label goes.
+Vector2 addLineMarkers(const EkfSlam& filter, int slot, const LineSupport* support, double k,
+                       const std_msgs::Header& header, visualization_msgs::MarkerArray* out) {
+  const LandmarkInfo& info = filter.landmarks()[slot];
+  const bool tentative = info.observations <= 1;
+  const PolarLine line = filter.lineLandmark(slot);
+  const Vector2 normal(std::cos(line.theta), std::sin(line.theta));
+  const Vector2 along = lineDirection(line.theta);
+  const Vector2 foot = line.p * normal;
+  const double s_min = support ? support->s_min : -0.5 * kUnknownExtentLength;
+  const double s_max = support ? support->s_max : 0.5 * kUnknownExtentLength;
+  visualization_msgs::Marker segment =
+      lineList(header, "line_landmarks", info.id, 0.05,
+               tentative ? kTentative : colour(0.2f, 0.4f, 1.0f, 0.9f));
+  addSegment(foot + s_min * along, foot + s_max * along, &segment);
+  out->markers.push_back(segment);
+  // A point at s along the line moves across it by dp − s dθ, so its
+  // variance there is σ_p² − 2s σ_pθ + s² σ_θ²: a hyperbola in s, drawn as
+  // a polyline of kPieces pieces per side (smooth enough at rviz's scale).
+  constexpr int kPieces = 8;
+  const Matrix2 c = filter.landmarkCovariance(slot);
+  visualization_msgs::Marker band =
+      lineList(header, "line_landmark_bands", info.id, 0.01,
+               tentative ? kTentative : colour(0.5f, 0.7f, 1.0f, 0.7f));
+  for (double side : {-1.0, 1.0}) {
+    auto edge = [&](int i) {
+      const double s = s_min + (s_max - s_min) * i / kPieces;
+      const double variance = c(0, 0) - 2.0 * s * c(0, 1) + s * s * c(1, 1);
+      return Vector2(foot + s * along + side * k * std::sqrt(std::max(variance, 0.0)) * normal);
+    };
+    for (int i = 0; i < kPieces; ++i) addSegment(edge(i), edge(i + 1), &band);
+  }
+  out->markers.push_back(band);
+  return foot + 0.5 * (s_min + s_max) * along;
+}
+
+// The θ-only line in `slot`: its segment and its fan (landmarkMarkers'
+// contract); returns where its label goes, or nothing when no endpoint
+// point gives it a place.
+std::optional<Vector2> addLineAngleMarkers(const EkfSlam& filter, int slot,
+                                           const LineSupport* support, double k,
+                                           const std_msgs::Header& header,
+                                           visualization_msgs::MarkerArray* out) {
+  const LineSupport none;  // no endpoints
+  std::vector<Vector2> ends;
+  for (int id : (support ? *support : none).endpoint_ids) {
+    const int endpoint = filter.slotOf(id);
+    if (endpoint >= 0 && filter.landmarkKind(endpoint) == LandmarkKind::kPoint) {
+      ends.push_back(filter.landmarkPosition(endpoint));
+    }
+  }
+  if (ends.empty()) return std::nullopt;
+  const LandmarkInfo& info = filter.landmarks()[slot];
+  const bool tentative = info.observations <= 1;
+  const double theta = filter.lineAngle(slot);
+  if (ends.size() == 1) {
+    const Vector2 half = 0.5 * kUnknownExtentLength * lineDirection(theta);
+    ends = {ends[0] - half, ends[0] + half};
+  }
+  const Vector2 middle = 0.5 * (ends[0] + ends[1]);
+  const double half_length = 0.5 * (ends[1] - ends[0]).norm();
+  visualization_msgs::Marker segment =
+      lineList(header, "line_angle_landmarks", info.id, 0.05,
+               tentative ? kTentative : colour(0.7f, 0.3f, 0.9f, 0.9f));
+  addSegment(ends[0], ends[1], &segment);
+  out->markers.push_back(segment);
+  visualization_msgs::Marker fan =
+      lineList(header, "line_angle_fans", info.id, 0.01,
+               tentative ? kTentative : colour(0.85f, 0.6f, 1.0f, 0.7f));
+  const double spread = k * std::sqrt(std::max(filter.lineAngleVariance(slot), 0.0));
+  for (double side : {-1.0, 1.0}) {
+    const Vector2 half = half_length * lineDirection(theta + side * spread);
+    addSegment(middle - half, middle + half, &fan);
+  }
+  out->markers.push_back(fan);
+  return middle;
 }
 
 }  // namespace
@@ -190,33 +291,42 @@ bool fromFeaturesMessage(const Features& message, FeatureSet* features, std::str
   return true;
 }
 
-LandmarkMap toLandmarkMapMessage(const EkfSlam& filter, const std_msgs::Header& header) {
+LandmarkMap toLandmarkMapMessage(const LandmarkMapFile& map, const std_msgs::Header& header) {
   LandmarkMap out;
   out.header = header;
-  out.landmarks.reserve(filter.landmarkCount());
-  for (int s = 0; s < filter.landmarkCount(); ++s) {
+  out.landmarks.reserve(map.landmarks.size());
+  for (const LandmarkRecord& r : map.landmarks) {
     Landmark m;
-    m.id = filter.landmarks()[s].id;
-    m.x = filter.landmarkPosition(s).x();
-    m.y = filter.landmarkPosition(s).y();
-    copy(filter.landmarkCovariance(s), &m.covariance);
-    m.observations = filter.landmarks()[s].observations;
-    m.tentative = m.observations <= 1;
+    m.id = r.id;
+    m.x = r.position.x();
+    m.y = r.position.y();
+    copy(r.covariance, &m.covariance);
+    m.observations = r.observations;
+    m.tentative = r.observations <= 1;
     out.landmarks.push_back(m);
   }
-  return out;
-}
-
-LandmarkMapFile toLandmarkMapFile(const EkfSlam& filter, const std::string& frame) {
-  LandmarkMapFile out;
-  out.frame = frame;
-  for (int s = 0; s < filter.landmarkCount(); ++s) {
-    LandmarkRecord r;
-    r.id = filter.landmarks()[s].id;
-    r.position = filter.landmarkPosition(s);
-    r.covariance = filter.landmarkCovariance(s);
-    r.observations = filter.landmarks()[s].observations;
-    out.landmarks.push_back(r);
+  for (const LineLandmarkRecord& r : map.lines) {
+    LineLandmark m;
+    m.id = r.id;
+    m.p = r.p;
+    m.theta = r.theta;
+    copy(r.covariance, &m.covariance);
+    m.observations = r.observations;
+    m.tentative = r.observations <= 1;
+    m.extent_known = r.has_extent;
+    m.s_min = r.s_min;
+    m.s_max = r.s_max;
+    out.lines.push_back(m);
+  }
+  for (const LineAngleRecord& r : map.line_angles) {
+    LineAngleLandmark m;
+    m.id = r.id;
+    m.theta = r.theta;
+    m.variance = r.variance;
+    m.observations = r.observations;
+    m.tentative = r.observations <= 1;
+    m.endpoint_ids = {r.endpoint_ids[0], r.endpoint_ids[1]};
+    out.line_angles.push_back(m);
   }
   return out;
 }
@@ -295,6 +405,7 @@ visualization_msgs::MarkerArray featureMarkers(const FeatureSet& features,
 }
 
 visualization_msgs::MarkerArray landmarkMarkers(const EkfSlam& filter,
+                                                const std::unordered_map<int, LineSupport>& support,
                                                 const IterationReport* iteration,
                                                 const std_msgs::Header& header,
                                                 double probability) {
@@ -302,16 +413,32 @@ visualization_msgs::MarkerArray landmarkMarkers(const EkfSlam& filter,
   visualization_msgs::Marker clear = marker(header, "", 0, visualization_msgs::Marker::CUBE);
   clear.action = visualization_msgs::Marker::DELETEALL;
   out.markers.push_back(clear);
+  // Per parameter, two-sided: the same probability as the ellipses' region.
+  const double k = std::sqrt(chiSquareQuantile(probability, 1.0));
   for (int s = 0; s < filter.landmarkCount(); ++s) {
     const LandmarkInfo& info = filter.landmarks()[s];
     const bool tentative = info.observations <= 1;
-    const Vector2 p = filter.landmarkPosition(s);
-    out.markers.push_back(ellipseMarker(
-        header, "landmark_ellipses", info.id, p, filter.landmarkCovariance(s), probability,
-        tentative ? colour(0.6f, 0.6f, 0.6f, 0.6f) : colour(0.1f, 0.8f, 0.2f, 0.7f)));
+    const auto seen = support.find(info.id);
+    const LineSupport* line_support = seen == support.end() ? nullptr : &seen->second;
+    std::optional<Vector2> label_at;
+    switch (info.kind) {
+      case LandmarkKind::kPoint:
+        label_at = filter.landmarkPosition(s);
+        out.markers.push_back(ellipseMarker(
+            header, "landmark_ellipses", info.id, *label_at, filter.landmarkCovariance(s),
+            probability, tentative ? kTentative : colour(0.1f, 0.8f, 0.2f, 0.7f)));
+        break;
+      case LandmarkKind::kLine:
+        label_at = addLineMarkers(filter, s, line_support, k, header, &out);
+        break;
+      case LandmarkKind::kLineAngle:
+        label_at = addLineAngleMarkers(filter, s, line_support, k, header, &out);
+        break;
+    }
+    if (!label_at) continue;
     visualization_msgs::Marker label =
         marker(header, "landmark_ids", info.id, visualization_msgs::Marker::TEXT_VIEW_FACING);
-    label.pose.position = point(p.x(), p.y(), 0.25);
+    label.pose.position = point(label_at->x(), label_at->y(), 0.25);
     label.scale.z = 0.2;
     label.color = colour(1.0f, 1.0f, 1.0f);
     label.text = std::to_string(info.id);

@@ -11,9 +11,11 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "ekf_slam_core/features/extract_features.h"
+#include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
 #include "ekf_slam_core/io/landmark_map.h"
 
@@ -40,9 +42,10 @@ Features toFeaturesMessage(const FeatureSet& features, const std_msgs::Header& h
 // validateFeatureSet.
 bool fromFeaturesMessage(const Features& message, FeatureSet* features, std::string* error);
 
-// The filter's map in the map frame (`header`), marginal covariances.
-LandmarkMap toLandmarkMapMessage(const EkfSlam& filter, const std_msgs::Header& header);
-LandmarkMapFile toLandmarkMapFile(const EkfSlam& filter, const std::string& frame);
+// A landmark map (the filter's through toLandmarkMapFile, or a loaded one)
+// as the message, in the map frame (`header`): each kind in its own list,
+// marginal covariances, tentative = seen once.
+LandmarkMap toLandmarkMapMessage(const LandmarkMapFile& map, const std_msgs::Header& header);
 
 // One entry per observation of the iteration; `header` = scan stamp + laser frame.
 AssociationReport toAssociationReport(const std::vector<PointObservation>& observations,
@@ -54,13 +57,30 @@ AssociationReport toAssociationReport(const std::vector<PointObservation>& obser
 visualization_msgs::MarkerArray featureMarkers(const FeatureSet& features,
                                                const std_msgs::Header& header);
 
-// rviz view of the filter (map frame in `header`): each landmark as a flat
-// cylinder at its covariance ellipse (namespace "landmark_ellipses", marker
-// id = landmark id; tentative ones grey), a text label with its id
-// ("landmark_ids"), the robot's position ellipse ("robot_ellipse") and, when
-// `iteration` is given, lines from the laser to every matched landmark
-// ("associations"). Starts with a DELETEALL so removed landmarks vanish.
+// rviz view of the filter (map frame in `header`), marker id = landmark id,
+// tentative landmarks grey:
+//   - each point as a flat cylinder at its covariance ellipse
+//     ("landmark_ellipses");
+//   - each (p, θ) line as a segment over its seen extent ("line_landmarks";
+//     from `support`, else a kUnknownExtentLength stub centred on the foot
+//     point), with its uncertainty ("line_landmark_bands"): two thin
+//     polylines at ±k σ(s) either side, where σ(s)² = σ_p² − 2s σ_pθ +
+//     s² σ_θ² is the variance of the wall's position across it at s along
+//     it, and k the two-sided quantile of `probability` (1.96 for 95 %).
+//     The band is narrowest where the wall is best known and widens with
+//     the θ uncertainty away from there: one shape for both parameters;
+//   - each θ-only line between its endpoint points ("line_angle_landmarks";
+//     a kUnknownExtentLength stub through the one endpoint when it has one,
+//     nothing without), with a fan of two thin segments through the
+//     midpoint at θ ± k σ_θ ("line_angle_fans"), as long as the segment: how
+//     far the direction's own estimate lets the wall's ends swing;
+//   - a text label with each drawn landmark's id ("landmark_ids"), the
+//     robot's position ellipse ("robot_ellipse") and, when `iteration` is
+//     given, lines from the laser to every matched point ("associations").
+// Starts with a DELETEALL so removed landmarks vanish.
+constexpr double kUnknownExtentLength = 2.0;  // m
 visualization_msgs::MarkerArray landmarkMarkers(const EkfSlam& filter,
+                                                const std::unordered_map<int, LineSupport>& support,
                                                 const IterationReport* iteration,
                                                 const std_msgs::Header& header, double probability);
 

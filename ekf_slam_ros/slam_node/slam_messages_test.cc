@@ -1,6 +1,6 @@
 // The pure helpers of the live nodes: covariance ellipse sizes, the rviz
-// markers built from a filter, and the conversions to this package's
-// messages.
+// markers built from a filter (points and both kinds of line), and the
+// conversions to this package's messages.
 #include "ekf_slam_ros/slam_node/slam_messages.h"
 #include "ekf_slam_ros/slam_node/processing_times.h"
 
@@ -10,8 +10,12 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <map>
 #include <random>
+#include <set>
+#include <unordered_map>
 
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 
 namespace ekf_slam {
@@ -96,7 +100,8 @@ TEST(LandmarkMarkers, EllipsesAtTheMeansWithFullAxesLabelsAndTheRobot) {
   std_msgs::Header header;
   header.frame_id = "map";
   header.stamp = ros::Time(12.5);
-  const visualization_msgs::MarkerArray markers = landmarkMarkers(filter, nullptr, header, 0.95);
+  const visualization_msgs::MarkerArray markers =
+      landmarkMarkers(filter, {}, nullptr, header, 0.95);
   ASSERT_FALSE(markers.markers.empty());
   EXPECT_EQ(markers.markers[0].action, visualization_msgs::Marker::DELETEALL);
   const double k = -2.0 * std::log(0.05);
@@ -135,7 +140,8 @@ TEST(Messages, LandmarkMapCarriesIdsMeansFullCovariancesAndTentativeFlag) {
   const EkfSlam filter = filterWithLandmarks();
   std_msgs::Header header;
   header.frame_id = "map";
-  const LandmarkMap map = toLandmarkMapMessage(filter, header);
+  const LandmarkMapFile file = toLandmarkMapFile(filter, {}, "map");
+  const LandmarkMap map = toLandmarkMapMessage(file, header);
   ASSERT_EQ(map.landmarks.size(), 2u);
   EXPECT_EQ(map.landmarks[0].id, 4);
   EXPECT_FALSE(map.landmarks[0].tentative);
@@ -144,10 +150,158 @@ TEST(Messages, LandmarkMapCarriesIdsMeansFullCovariancesAndTentativeFlag) {
   EXPECT_NEAR(map.landmarks[0].covariance[1], c(0, 1), 1e-15);
   EXPECT_NEAR(map.landmarks[0].covariance[2], c(1, 0), 1e-15);
   EXPECT_NEAR(map.landmarks[0].covariance[3], c(1, 1), 1e-15);
-  const LandmarkMapFile file = toLandmarkMapFile(filter, "map");
+  EXPECT_TRUE(map.lines.empty() && map.line_angles.empty());
   ASSERT_EQ(file.landmarks.size(), 2u);
   EXPECT_EQ(file.landmarks[1].id, 9);
   EXPECT_EQ(file.landmarks[1].position, Vector2(-2.0, 4.0));
+}
+
+// filterWithLandmarks' points 4 and 9 and, with their support:
+//   12: the wall x = 3 seen from y = -1 to 2, with a p–θ correlation;
+//   16: a tentative (p, θ) line without support;
+//   13: a θ-only line between points 4 and 9;
+//   14: a θ-only line with point 4 alone;
+//   15: a θ-only line without endpoints.
+struct LineMap {
+  EkfSlam filter = filterWithLandmarks();
+  std::unordered_map<int, LineSupport> support;
+  Matrix2 wall_covariance;
+
+  LineMap() {
+    wall_covariance << 0.01, 0.001, 0.001, 4e-4;
+    EXPECT_EQ(filter.addLineLandmark(12, PolarLine{3.0, 0.0}, wall_covariance, 4),
+              FilterStatus::kOk);
+    EXPECT_EQ(filter.addLineLandmark(16, PolarLine{2.0, 1.0}, Matrix2::Identity() * 1e-3, 1),
+              FilterStatus::kOk);
+    for (int id : {13, 14, 15}) {
+      EXPECT_EQ(filter.addLineAngleLandmark(id, 0.5 + 0.1 * id, 1e-3 * (id - 12), 3),
+                FilterStatus::kOk);
+    }
+    support[12].s_min = -1.0;
+    support[12].s_max = 2.0;
+    support[13].endpoint_ids[0] = 4;
+    support[13].endpoint_ids[1] = 9;
+    support[14].endpoint_ids[1] = 4;
+    support[15] = LineSupport{};
+  }
+};
+
+Vector2 at(const geometry_msgs::Point& p) { return Vector2(p.x, p.y); }
+
+TEST(LandmarkMarkers, LinesAreSegmentsOverTheirExtentWithTheirUncertainty) {
+  const LineMap lines;
+  const EkfSlam& filter = lines.filter;
+  std_msgs::Header header;
+  header.frame_id = "map";
+  const visualization_msgs::MarkerArray markers =
+      landmarkMarkers(filter, lines.support, nullptr, header, 0.95);
+  const double k = 1.959963984540054;  // two-sided 95 %
+  std::map<std::pair<std::string, int>, visualization_msgs::Marker> by_name;
+  std::set<int> labelled;
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    if (m.action == visualization_msgs::Marker::DELETEALL) continue;
+    EXPECT_TRUE(by_name.emplace(std::make_pair(m.ns, m.id), m).second) << m.ns << " " << m.id;
+    if (m.ns == "landmark_ids") labelled.insert(m.id);
+  }
+  EXPECT_EQ(labelled, (std::set<int>{4, 9, 12, 13, 14, 16}));  // 15 has no place to be drawn
+  for (const auto& [name, m] : by_name) {
+    EXPECT_NE(name.second, 15) << name.first;
+    if (name.first == "landmark_ellipses") {
+      EXPECT_TRUE(name.second == 4 || name.second == 9);
+    }
+  }
+
+  // The wall x = 3 over y ∈ [-1, 2] …
+  const visualization_msgs::Marker& wall = by_name.at({"line_landmarks", 12});
+  ASSERT_EQ(wall.type, visualization_msgs::Marker::LINE_LIST);
+  ASSERT_EQ(wall.points.size(), 2u);
+  EXPECT_LT((at(wall.points[0]) - Vector2(3.0, -1.0)).norm(), 1e-12);
+  EXPECT_LT((at(wall.points[1]) - Vector2(3.0, 2.0)).norm(), 1e-12);
+  // … and its band: at every vertex, k σ across the wall, σ² = σ_p² − 2s σ_pθ + s² σ_θ².
+  const visualization_msgs::Marker& band = by_name.at({"line_landmark_bands", 12});
+  ASSERT_EQ(band.points.size(), 32u);  // 8 pieces a side
+  const Matrix2& c = lines.wall_covariance;
+  int left = 0, right = 0;
+  for (const geometry_msgs::Point& p : band.points) {
+    const double s = p.y;
+    EXPECT_GE(s, -1.0 - 1e-12);
+    EXPECT_LE(s, 2.0 + 1e-12);
+    EXPECT_NEAR(std::abs(p.x - 3.0), k * std::sqrt(c(0, 0) - 2.0 * s * c(0, 1) + s * s * c(1, 1)),
+                1e-12);
+    (p.x > 3.0 ? right : left)++;
+  }
+  EXPECT_EQ(left, 16);
+  EXPECT_EQ(right, 16);
+  EXPECT_LT(band.scale.x, wall.scale.x);  // thin beside the segment
+
+  // Without support: a kUnknownExtentLength stub centred on the foot point, grey (tentative).
+  const visualization_msgs::Marker& stub = by_name.at({"line_landmarks", 16});
+  const Vector2 foot = 2.0 * Vector2(std::cos(1.0), std::sin(1.0));
+  EXPECT_NEAR((at(stub.points[1]) - at(stub.points[0])).norm(), kUnknownExtentLength, 1e-12);
+  EXPECT_LT((0.5 * (at(stub.points[0]) + at(stub.points[1])) - foot).norm(), 1e-12);
+  EXPECT_FLOAT_EQ(stub.color.r, stub.color.b);
+  EXPECT_NE(wall.color.r, wall.color.b);
+
+  // θ-only between its endpoints, its fan at ±k σ_θ through the midpoint.
+  const Vector2 p4 = filter.landmarkPosition(filter.slotOf(4));
+  const Vector2 p9 = filter.landmarkPosition(filter.slotOf(9));
+  const visualization_msgs::Marker& between = by_name.at({"line_angle_landmarks", 13});
+  ASSERT_EQ(between.points.size(), 2u);
+  EXPECT_EQ(at(between.points[0]), p4);
+  EXPECT_EQ(at(between.points[1]), p9);
+  const visualization_msgs::Marker& fan = by_name.at({"line_angle_fans", 13});
+  ASSERT_EQ(fan.points.size(), 4u);
+  const double theta = 0.5 + 1.3, spread = k * std::sqrt(1e-3);
+  for (int i = 0; i < 2; ++i) {
+    const Vector2 a = at(fan.points[2 * i]), b = at(fan.points[2 * i + 1]);
+    EXPECT_LT((0.5 * (a + b) - 0.5 * (p4 + p9)).norm(), 1e-12);
+    EXPECT_NEAR((b - a).norm(), (p9 - p4).norm(), 1e-12);
+    // The segment's normal direction is θ ± k σ_θ.
+    const double normal = std::atan2(b.y() - a.y(), b.x() - a.x()) - 0.5 * kPi;
+    EXPECT_NEAR(wrapAngle(normal - theta), i == 0 ? -spread : spread, 1e-12);
+  }
+  // One endpoint: a stub through it along the line's direction.
+  const visualization_msgs::Marker& one = by_name.at({"line_angle_landmarks", 14});
+  const Vector2 a = at(one.points[0]), b = at(one.points[1]);
+  EXPECT_LT((0.5 * (a + b) - p4).norm(), 1e-12);
+  EXPECT_NEAR((b - a).norm(), kUnknownExtentLength, 1e-12);
+  EXPECT_NEAR(std::abs((b - a).normalized().dot(Vector2(std::cos(1.9), std::sin(1.9)))), 0.0,
+              1e-12);
+}
+
+TEST(Messages, LandmarkMapCarriesEveryKindInItsOwnList) {
+  const LineMap lines;
+  std_msgs::Header header;
+  header.frame_id = "map";
+  const LandmarkMap map =
+      toLandmarkMapMessage(toLandmarkMapFile(lines.filter, lines.support, "map"), header);
+  ASSERT_EQ(map.landmarks.size(), 2u);  // the points, as before
+  ASSERT_EQ(map.lines.size(), 2u);
+  ASSERT_EQ(map.line_angles.size(), 3u);
+  const LineLandmark& wall = map.lines[0];
+  EXPECT_EQ(wall.id, 12);
+  EXPECT_EQ(wall.p, 3.0);
+  EXPECT_EQ(wall.theta, 0.0);
+  EXPECT_EQ(wall.covariance[1], 0.001);
+  EXPECT_EQ(wall.covariance[3], 4e-4);
+  EXPECT_EQ(wall.observations, 4);
+  EXPECT_FALSE(wall.tentative);
+  EXPECT_TRUE(wall.extent_known);
+  EXPECT_EQ(wall.s_min, -1.0);
+  EXPECT_EQ(wall.s_max, 2.0);
+  EXPECT_EQ(map.lines[1].id, 16);
+  EXPECT_TRUE(map.lines[1].tentative);
+  EXPECT_FALSE(map.lines[1].extent_known);
+  const LineAngleLandmark& between = map.line_angles[0];
+  EXPECT_EQ(between.id, 13);
+  EXPECT_NEAR(between.theta, 1.8, 1e-15);
+  EXPECT_NEAR(between.variance, 1e-3, 1e-18);
+  EXPECT_EQ(between.endpoint_ids[0], 4);
+  EXPECT_EQ(between.endpoint_ids[1], 9);
+  EXPECT_EQ(map.line_angles[1].endpoint_ids[0], -1);
+  EXPECT_EQ(map.line_angles[1].endpoint_ids[1], 4);
+  EXPECT_EQ(map.line_angles[2].endpoint_ids[0], -1);
+  EXPECT_EQ(map.line_angles[2].endpoint_ids[1], -1);
 }
 
 TEST(Messages, AssociationReportNamesDecisionsCandidatesAndIds) {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
@@ -137,12 +138,9 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   }
   pipeline_ = std::make_unique<SlamPipeline>(options);
   if (seed_map_) {
-    int refused = 0;
-    for (const LandmarkRecord& r : seed_map_->landmarks) {
-      const FilterStatus status =
-          pipeline_->mutableFilter().addLandmark(r.id, r.position, r.covariance, r.observations);
-      if (status != FilterStatus::kOk) ++refused;
-    }
+    // Without a support to fill (the pipeline keeps none yet), the loaded
+    // lines' extents and θ-only lines' endpoints are not used.
+    const int refused = seedFilter(*seed_map_, &pipeline_->mutableFilter());
     if (refused > 0) ROS_WARN("ekf_slam_node: %d landmarks of the loaded map refused", refused);
     seed_map_.reset();
   }
@@ -257,7 +255,8 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
     if (static_cast<int>(nis_window_.size()) > params_.nis_window) nis_window_.pop_front();
   }
   if (landmarks_publisher_.getNumSubscribers() > 0) {
-    landmarks_publisher_.publish(landmarkMarkers(pipeline_->filter(), &result.iteration, map_header,
+    landmarks_publisher_.publish(landmarkMarkers(pipeline_->filter(), lineSupport(),
+                                                 &result.iteration, map_header,
                                                  params_.ellipse_probability));
   }
   publishLandmarkMap(map_header);

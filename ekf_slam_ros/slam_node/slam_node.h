@@ -48,8 +48,10 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
+#include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 #include "ekf_slam_ros/offline/slam_config.h"
@@ -143,6 +145,9 @@ class SlamNode {
   void publishLoopClosedPath(const ros::Time& data_stamp);
   void onMapTimer(const ros::TimerEvent&);
   void publishLandmarkMap(const std_msgs::Header& header);
+  // The seen extent and endpoints of the pipeline's line landmarks, for
+  // the map file, the LandmarkMap message and the markers.
+  const std::unordered_map<int, LineSupport>& lineSupport() const;
   // The grid last published on `map` (live map, ~smooth or a loaded map);
   // false when there is none.
   bool currentGrid(nav_msgs::OccupancyGrid* map) const;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
@@ -363,7 +364,7 @@ void SlamNode::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& mes
   // The landmarks mapped so far (or the map loaded and not yet used) stay,
   // as the prior of the restarted filter.
   std::optional<LandmarkMapFile> prior = seed_map_;
-  if (pipeline_) prior = toLandmarkMapFile(pipeline_->filter(), params_.map_frame);
+  if (pipeline_) prior = toLandmarkMapFile(pipeline_->filter(), lineSupport(), params_.map_frame);
   const std::string error = setStartPose(pose, covariance);
   if (!error.empty()) {
     ROS_WARN("ekf_slam_node: initialpose ignored: %s", error.c_str());

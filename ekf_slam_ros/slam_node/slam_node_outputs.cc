@@ -5,6 +5,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/OccupancyGrid.h>
 
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
@@ -16,28 +17,22 @@ using ros_conversions::toPoseMessage;
 
 }  // namespace
 
+const std::unordered_map<int, LineSupport>& SlamNode::lineSupport() const {
+  // Empty until the pipeline keeps line support: lines are then saved
+  // without an extent and θ-only lines without endpoints.
+  static const std::unordered_map<int, LineSupport> kNone;
+  return kNone;
+}
+
 void SlamNode::publishLandmarkMap(const std_msgs::Header& header) {
-  if (pipeline_) {
-    landmark_map_publisher_.publish(toLandmarkMapMessage(pipeline_->filter(), header));
-    return;
-  }
   // No filter yet (before the first scan): the map waiting to seed it, or none.
-  LandmarkMap message;
-  message.header = header;
-  if (seed_map_) {
-    for (const LandmarkRecord& r : seed_map_->landmarks) {
-      Landmark m;
-      m.id = r.id;
-      m.x = r.position.x();
-      m.y = r.position.y();
-      m.covariance = {r.covariance(0, 0), r.covariance(0, 1), r.covariance(1, 0),
-                      r.covariance(1, 1)};
-      m.observations = r.observations;
-      m.tentative = r.observations <= 1;
-      message.landmarks.push_back(m);
-    }
+  LandmarkMapFile map;
+  if (pipeline_) {
+    map = toLandmarkMapFile(pipeline_->filter(), lineSupport(), header.frame_id);
+  } else if (seed_map_) {
+    map = *seed_map_;
   }
-  landmark_map_publisher_.publish(message);
+  landmark_map_publisher_.publish(toLandmarkMapMessage(map, header));
 }
 
 void SlamNode::publishMapToOdom(const ros::Time& data_stamp) {

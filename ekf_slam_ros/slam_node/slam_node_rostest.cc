@@ -511,6 +511,24 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
     EXPECT_EQ(file.landmarks[i].position.x(), saved.landmarks[i].x);
     EXPECT_EQ(file.landmarks[i].covariance(0, 1), saved.landmarks[i].covariance[1]);
   }
+  // Lines load too: a wall and a θ-only wall on two of the points join the file.
+  LineLandmarkRecord wall;
+  wall.id = 1000;
+  wall.p = 2.5;
+  wall.theta = -0.75;
+  wall.covariance << 4e-4, 1e-5, 1e-5, 1e-4;
+  wall.observations = 6;
+  wall.has_extent = true;
+  wall.s_max = 3.0;
+  file.lines.push_back(wall);
+  LineAngleRecord direction;
+  direction.id = 1001;
+  direction.theta = 1.25;
+  direction.variance = 2e-4;
+  direction.endpoint_ids[0] = file.landmarks[0].id;
+  direction.endpoint_ids[1] = file.landmarks[1].id;
+  file.line_angles.push_back(direction);
+  ASSERT_EQ(writeLandmarkMap(path, file), "");
 
   // Reset: an empty map.
   ASSERT_TRUE(trigger("reset"));
@@ -532,10 +550,21 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   load.request.localize_only = true;
   ASSERT_TRUE(call("load_map", &load));
   ASSERT_TRUE(load.response.success) << load.response.message;
-  EXPECT_EQ(load.response.landmarks, static_cast<int>(saved.landmarks.size()));
+  EXPECT_EQ(load.response.landmarks, static_cast<int>(saved.landmarks.size()) + 2);
   EXPECT_TRUE(waitFor([&] { return sameLandmarks(observer_.map(), saved); }, 3.0))
       << observer_.map().landmarks.size() << " landmarks after load, saved "
       << saved.landmarks.size();
+  const ekf_slam::LandmarkMap loaded = observer_.map();
+  ASSERT_EQ(loaded.lines.size(), 1u);
+  EXPECT_EQ(loaded.lines[0].id, 1000);
+  EXPECT_EQ(loaded.lines[0].p, 2.5);
+  EXPECT_EQ(loaded.lines[0].theta, -0.75);
+  EXPECT_EQ(loaded.lines[0].covariance[1], 1e-5);
+  EXPECT_EQ(loaded.lines[0].observations, 6);
+  ASSERT_EQ(loaded.line_angles.size(), 1u);
+  EXPECT_EQ(loaded.line_angles[0].id, 1001);
+  EXPECT_EQ(loaded.line_angles[0].theta, 1.25);
+  EXPECT_EQ(loaded.line_angles[0].variance, 2e-4);
   std::remove(path);
 
   // Localisation only: iterations go on, the map never grows.

@@ -12,6 +12,7 @@
 
 #include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_core/mapping/occupancy_grid.h"
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
@@ -31,6 +32,16 @@ std::string gridPathFor(const std::string& landmark_path) {
       landmark_path.compare(landmark_path.size() - suffix.size(), suffix.size(), suffix) == 0;
   return (yaml ? landmark_path.substr(0, landmark_path.size() - suffix.size()) : landmark_path) +
          "_grid.yaml";
+}
+
+// "12 landmarks (lines: 3, line angles: 2)", for the services' replies.
+std::string landmarkCounts(const LandmarkMapFile& map) {
+  std::string text = std::to_string(map.size()) + " landmarks";
+  if (!map.lines.empty() || !map.line_angles.empty()) {
+    text += " (lines: " + std::to_string(map.lines.size()) +
+            ", line angles: " + std::to_string(map.line_angles.size()) + ")";
+  }
+  return text;
 }
 
 // The key scans moved to the smoothed pose of their scan (matched by
@@ -113,7 +124,7 @@ bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response)
   }
   LandmarkMapFile map;
   if (pipeline_) {
-    map = toLandmarkMapFile(pipeline_->filter(), params_.map_frame);
+    map = toLandmarkMapFile(pipeline_->filter(), lineSupport(), params_.map_frame);
   } else if (seed_map_) {
     map = *seed_map_;
   } else {
@@ -142,9 +153,8 @@ bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response)
   }
   const std::string error = writeLandmarkMap(request.path, map);
   response.success = error.empty();
-  response.message = error.empty() ? std::to_string(map.landmarks.size()) +
-                                         " landmarks written to " + request.path + grid_note
-                                   : error;
+  response.message =
+      error.empty() ? landmarkCounts(map) + " written to " + request.path + grid_note : error;
   ROS_INFO("ekf_slam_node: save_map: %s", response.message.c_str());
   return true;
 }
@@ -196,11 +206,11 @@ bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response)
     hold_loaded_grid_ = localize_only_;  // mapping on: the live map takes over
   }
   response.success = true;
-  response.landmarks = static_cast<int>(map.landmarks.size());
+  response.landmarks = static_cast<int>(map.size());
   std::ostringstream text;
   text.setf(std::ios::fixed);
   text.precision(3);
-  text << map.landmarks.size() << " landmarks loaded from " << request.path;
+  text << landmarkCounts(map) << " loaded from " << request.path;
   if (grid) text << " and a " << grid->width << " x " << grid->height << " grid from " << grid_path;
   text << "; the robot starts at (" << start.x << ", " << start.y << ", " << radToDeg(start.theta)
        << " deg)" << (localize_only_ ? "; localisation only" : "; mapping continues");

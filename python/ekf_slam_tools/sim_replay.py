@@ -145,7 +145,7 @@ def pause_and_replay(test, directory, recorder, bag_path, wait_for_done=True):
     rts_error, _ = mean_position_error(rts, truth)
     r = {
         "scans": len(live_stamps),
-        "live_landmarks": len(live_map.landmarks),
+        "live_landmarks": len(live_map.landmarks) + len(live_map.lines) + len(live_map.line_angles),
         "offline_landmarks": offline_landmarks,
         "distance": math.hypot(off[0] - live_last[0], off[1] - live_last[1]),
         "heading": abs(se2.wrap(off[2] - live_last[2])),

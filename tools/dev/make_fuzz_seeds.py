@@ -91,6 +91,19 @@ def main():
           "  - {id: 3, x: 1.25, y: -0.5, covariance: [0.01, 0.001, 0.001, 0.02], observations: 7}\n"
           "  - {id: 9, x: -4, y: 2.5e1, covariance: [0.04, 0, 0.04]}\n")
     write("landmark_map_fuzz", "empty", "version: 1\nframe: odom\ncount: 0\nlandmarks:\n")
+    write("landmark_map_fuzz", "every_kind",
+          "version: 2\nframe: map\ncount: 5\nlandmarks:\n"
+          "  - {id: 3, x: 6, y: -3, covariance: [0.01, 0.001, 0.001, 0.02], observations: 7}\n"
+          "  - {id: 4, x: 6, y: 4, covariance: [0.02, 0, 0, 0.02]}\n"
+          "lines:\n"
+          "  - {id: 5, p: 2.5, theta: 1.5707963267948966, covariance: [4e-4, 1e-5, 1e-5, 1e-4], "
+          "observations: 12, extent: [-1.5, 3]}\n"
+          "  - {id: 6, p: 0, theta: -3.141592653589793, covariance: [1e-3, 0, 0, 1e-3]}\n"
+          "line_angles:\n"
+          "  - {id: 8, theta: 0, variance: 1e-4, observations: 9, endpoints: [3, 4]}\n")
+    write("landmark_map_fuzz", "lines_only",
+          "version: 2\nframe: map\ncount: 1\nlandmarks: []\nlines: []\nline_angles:\n"
+          "  - {id: 0, theta: 3.14, variance: 9.8, endpoints: [-1, -1]}\n")
 
 
 if __name__ == "__main__":
