@@ -79,6 +79,7 @@
 #include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/mecp/mecp_update.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
+#include "tools/dev/experiment_options.h"
 
 namespace {
 
@@ -487,37 +488,16 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
 
 double ratio(double sum, int count) { return count > 0 ? sum / count : kNan; }
 
-void usage() {
-  std::cerr << "usage: ekf_slam_line_experiment --out DIR [--runs N] [--seed S]\n"
-               "                                 [--odometry-noise-scale F]\n";
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out_dir;
-  int runs = 30;
-  unsigned first_seed = 1;
-  double noise_scale = 1.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--out" && i + 1 < argc) {
-      out_dir = argv[++i];
-    } else if (arg == "--runs" && i + 1 < argc) {
-      runs = std::atoi(argv[++i]);
-    } else if (arg == "--seed" && i + 1 < argc) {
-      first_seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
-    } else if (arg == "--odometry-noise-scale" && i + 1 < argc) {
-      noise_scale = std::atof(argv[++i]);
-    } else {
-      usage();
-      return 2;
-    }
-  }
-  if (out_dir.empty() || runs < 1 || !(noise_scale > 0.0)) {
-    usage();
-    return 2;
-  }
+  ekf_slam::ExperimentOptions options;
+  options.runs = 30;
+  if (!ekf_slam::parseExperimentOptions(argc, argv, "ekf_slam_line_experiment", &options)) return 2;
+  const std::string& out_dir = options.out_dir;
+  const int runs = options.runs;
+  const unsigned first_seed = options.first_seed;
+  const double noise_scale = options.noise_scale;
   const std::string dir = out_dir + "/";
   {
     std::ofstream world(dir + "world.txt");

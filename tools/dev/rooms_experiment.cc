@@ -77,6 +77,7 @@
 #include "ekf_slam_core/mecp/doorways.h"
 #include "ekf_slam_core/mecp/room_gating.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
+#include "tools/dev/experiment_options.h"
 
 namespace {
 
@@ -357,37 +358,17 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
   }
 }
 
-void usage() {
-  std::cerr << "usage: ekf_slam_rooms_experiment --out DIR [--runs N] [--seed S]\n"
-               "                                  [--odometry-noise-scale F]\n";
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out_dir;
-  int runs = 20;
-  unsigned first_seed = 1;
-  double noise_scale = 1.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--out" && i + 1 < argc) {
-      out_dir = argv[++i];
-    } else if (arg == "--runs" && i + 1 < argc) {
-      runs = std::atoi(argv[++i]);
-    } else if (arg == "--seed" && i + 1 < argc) {
-      first_seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
-    } else if (arg == "--odometry-noise-scale" && i + 1 < argc) {
-      noise_scale = std::atof(argv[++i]);
-    } else {
-      usage();
-      return 2;
-    }
-  }
-  if (out_dir.empty() || runs < 1 || !(noise_scale > 0.0)) {
-    usage();
+  ekf_slam::ExperimentOptions options;
+  options.runs = 20;
+  if (!ekf_slam::parseExperimentOptions(argc, argv, "ekf_slam_rooms_experiment", &options))
     return 2;
-  }
+  const std::string& out_dir = options.out_dir;
+  const int runs = options.runs;
+  const unsigned first_seed = options.first_seed;
+  const double noise_scale = options.noise_scale;
   const std::string dir = out_dir + "/";
 
   const std::vector<Segment2> wall_list = walls();
