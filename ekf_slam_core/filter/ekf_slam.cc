@@ -669,11 +669,9 @@ FilterStatus EkfSlam::augmentLine(const LineObservation& observation, LandmarkKi
   return FilterStatus::kOk;
 }
 
-namespace {
-
 // One linearised line measurement: `rows` (1 or 2) rows of innovation,
 // noise and Jacobian blocks on the robot and on landmark slots.
-struct LinearisedLine {
+struct EkfSlam::LinearisedLine {
   int rows = 2;
   Vector2 innovation = Vector2::Zero();
   Matrix2 noise = Matrix2::Zero();
@@ -681,7 +679,117 @@ struct LinearisedLine {
   std::vector<std::pair<int, Matrix2>> blocks;  // (slot, rows × landmark dim, top-left)
 };
 
-}  // namespace
+FilterStatus EkfSlam::linearizeLineMatch(const LineObservation& obs, const LineMatch& match,
+                                         LinearisedLine* out) const {
+  if (!obs.z.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+  const int slot = slotOf(match.landmark_id);
+  if (slot < 0) return FilterStatus::kUnknownLandmark;
+  const LandmarkKind kind = landmarks_[slot].kind;
+  if (kind == LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+  const Pose2 robot = pose();
+  const Pose2& laser = options_.laser_pose;
+  LinearisedLine& line = *out;
+  line = LinearisedLine();
+  line.noise = obs.covariance;
+  PolarLine predicted;
+  if (kind == LandmarkKind::kLine) {
+    Matrix2 H_line;
+    if (!predictLineObservation(robot, laser, lineLandmark(slot), &predicted, &line.H_robot,
+                                &H_line)) {
+      return FilterStatus::kBadObservation;
+    }
+    line.blocks.emplace_back(slot, H_line);
+  } else {
+    int endpoints[2], count = 0;
+    for (int e : match.endpoint_ids) {
+      if (e < 0) continue;
+      const int s = slotOf(e);
+      if (s < 0) return FilterStatus::kUnknownLandmark;
+      if (landmarks_[s].kind != LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+      endpoints[count++] = s;
+    }
+    if (count == 2 && endpoints[0] == endpoints[1]) return FilterStatus::kBadObservation;
+    const double theta_f = lineAngle(slot);
+    if (count == 0) {  // θ alone, modulo π
+      double theta = 0.0, H_angle = 0.0;
+      RowVector3 H_r;
+      if (!predictLineAngle(robot, laser, theta_f, &theta, &H_r, &H_angle)) {
+        return FilterStatus::kBadObservation;
+      }
+      line.rows = 1;
+      line.innovation(0) = lineAngleDifference(obs.z.theta, theta);
+      line.noise = Matrix2::Zero();
+      line.noise(0, 0) = obs.covariance(1, 1);
+      line.H_robot.row(0) = H_r;
+      Matrix2 block = Matrix2::Zero();
+      block(0, 0) = H_angle;
+      line.blocks.emplace_back(slot, block);
+      return FilterStatus::kOk;
+    }
+    Matrix2 H_m1, H_m2;
+    Vector2 H_angle;
+    const bool ok =
+        count == 1
+            ? predictLineFromAngleAndPoint(robot, laser, theta_f, landmarkPosition(endpoints[0]),
+                                           &predicted, &line.H_robot, &H_m1, &H_angle)
+            : predictLineFromAngleAndEndpoints(robot, laser, theta_f,
+                                               landmarkPosition(endpoints[0]),
+                                               landmarkPosition(endpoints[1]), &predicted,
+                                               &line.H_robot, &H_m1, &H_m2, &H_angle);
+    if (!ok) return FilterStatus::kBadObservation;
+    Matrix2 angle_block = Matrix2::Zero();
+    angle_block.col(0) = H_angle;
+    line.blocks.emplace_back(slot, angle_block);
+    line.blocks.emplace_back(endpoints[0], H_m1);
+    if (count == 2) line.blocks.emplace_back(endpoints[1], H_m2);
+  }
+  // ν = z − ẑ with the p-sign and θ-wrap ambiguity resolved towards ẑ;
+  // ∂ν/∂ẑ = −flip, so the measurement Jacobian is flip · H.
+  Matrix2 J;
+  if (!lineInnovation(obs.z, predicted, &line.innovation, &J)) {
+    return FilterStatus::kBadObservation;
+  }
+  const Matrix2 flip = -J;
+  line.H_robot = flip * line.H_robot;
+  for (auto& block : line.blocks) block.second = flip * block.second;
+  return FilterStatus::kOk;
+}
+
+FilterStatus EkfSlam::predictLineMatch(const LineObservation& observation, const LineMatch& match,
+                                       Eigen::VectorXd* innovation,
+                                       Eigen::MatrixXd* innovation_covariance) const {
+  LinearisedLine line;
+  const FilterStatus status = linearizeLineMatch(observation, match, &line);
+  if (status != FilterStatus::kOk) return status;
+  // H over the few state entries it touches; P read from its lower
+  // triangle, which is current everywhere.
+  std::vector<int> index = {0, 1, 2};
+  for (const auto& block : line.blocks) {
+    const int start = landmarkIndex(block.first);
+    for (int d = 0; d < landmarkDim(landmarks_[block.first].kind); ++d) index.push_back(start + d);
+  }
+  const int m = static_cast<int>(index.size());
+  const int r = line.rows;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(r, m);
+  H.leftCols<3>() = line.H_robot.topRows(r);
+  int column = kPoseDim;
+  for (const auto& [slot, block] : line.blocks) {
+    const int d = landmarkDim(landmarks_[slot].kind);
+    H.middleCols(column, d) = block.topLeftCorner(r, d);
+    column += d;
+  }
+  Eigen::MatrixXd P(m, m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) {
+      const int i = std::max(index[a], index[b]), j = std::min(index[a], index[b]);
+      P(a, b) = P_(i, j);
+    }
+  }
+  *innovation = line.innovation.head(r);
+  *innovation_covariance = H * P * H.transpose() + line.noise.topLeftCorner(r, r);
+  return FilterStatus::kOk;
+}
 
 FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observations,
                                   const std::vector<LineMatch>& matches, std::vector<double>* nis) {
@@ -694,90 +802,18 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
   std::vector<LinearisedLine> lines(k);
   std::vector<char> line_used(landmarkCount(), 0);
   std::vector<int> touched;
-  const Pose2 robot = pose();
-  const Pose2& laser = options_.laser_pose;
   for (int i = 0; i < k; ++i) {
     const LineMatch& match = matches[i];
     if (match.observation < 0 || match.observation >= static_cast<int>(observations.size())) {
       return FilterStatus::kBadObservation;
     }
-    const LineObservation& obs = observations[match.observation];
-    if (!obs.z.allFinite()) return FilterStatus::kNonFiniteInput;
-    if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+    const FilterStatus status =
+        linearizeLineMatch(observations[match.observation], match, &lines[i]);
+    if (status != FilterStatus::kOk) return status;
     const int slot = slotOf(match.landmark_id);
-    if (slot < 0) return FilterStatus::kUnknownLandmark;
-    const LandmarkKind kind = landmarks_[slot].kind;
-    if (kind == LandmarkKind::kPoint || line_used[slot]) return FilterStatus::kBadObservation;
+    if (line_used[slot]) return FilterStatus::kBadObservation;
     line_used[slot] = 1;
-    touched.push_back(slot);
-    LinearisedLine& line = lines[i];
-    line.noise = obs.covariance;
-    PolarLine predicted;
-    Matrix2 flip = Matrix2::Identity();  // innovation's sign convention for the p row
-    if (kind == LandmarkKind::kLine) {
-      Matrix2 H_line;
-      if (!predictLineObservation(robot, laser, lineLandmark(slot), &predicted, &line.H_robot,
-                                  &H_line)) {
-        return FilterStatus::kBadObservation;
-      }
-      line.blocks.emplace_back(slot, H_line);
-    } else {
-      int endpoints[2], count = 0;
-      for (int e : match.endpoint_ids) {
-        if (e < 0) continue;
-        const int s = slotOf(e);
-        if (s < 0) return FilterStatus::kUnknownLandmark;
-        if (landmarks_[s].kind != LandmarkKind::kPoint) return FilterStatus::kBadObservation;
-        endpoints[count++] = s;
-      }
-      if (count == 2 && endpoints[0] == endpoints[1]) return FilterStatus::kBadObservation;
-      const double theta_f = lineAngle(slot);
-      if (count == 0) {  // θ alone, modulo π
-        double theta = 0.0, H_angle = 0.0;
-        RowVector3 H_r;
-        if (!predictLineAngle(robot, laser, theta_f, &theta, &H_r, &H_angle)) {
-          return FilterStatus::kBadObservation;
-        }
-        line.rows = 1;
-        line.innovation(0) = lineAngleDifference(obs.z.theta, theta);
-        line.noise = Matrix2::Zero();
-        line.noise(0, 0) = obs.covariance(1, 1);
-        line.H_robot.row(0) = H_r;
-        Matrix2 block = Matrix2::Zero();
-        block(0, 0) = H_angle;
-        line.blocks.emplace_back(slot, block);
-        continue;
-      }
-      Matrix2 H_m1, H_m2;
-      Vector2 H_angle;
-      const bool ok =
-          count == 1
-              ? predictLineFromAngleAndPoint(robot, laser, theta_f, landmarkPosition(endpoints[0]),
-                                             &predicted, &line.H_robot, &H_m1, &H_angle)
-              : predictLineFromAngleAndEndpoints(robot, laser, theta_f,
-                                                 landmarkPosition(endpoints[0]),
-                                                 landmarkPosition(endpoints[1]), &predicted,
-                                                 &line.H_robot, &H_m1, &H_m2, &H_angle);
-      if (!ok) return FilterStatus::kBadObservation;
-      Matrix2 angle_block = Matrix2::Zero();
-      angle_block.col(0) = H_angle;
-      line.blocks.emplace_back(slot, angle_block);
-      line.blocks.emplace_back(endpoints[0], H_m1);
-      touched.push_back(endpoints[0]);
-      if (count == 2) {
-        line.blocks.emplace_back(endpoints[1], H_m2);
-        touched.push_back(endpoints[1]);
-      }
-    }
-    // ν = z − ẑ with the p-sign and θ-wrap ambiguity resolved towards ẑ;
-    // ∂ν/∂ẑ = −flip, so the measurement Jacobian is flip · H.
-    Matrix2 J;
-    if (!lineInnovation(obs.z, predicted, &line.innovation, &J)) {
-      return FilterStatus::kBadObservation;
-    }
-    flip = -J;
-    line.H_robot = flip * line.H_robot;
-    for (auto& block : line.blocks) block.second = flip * block.second;
+    for (const auto& block : lines[i].blocks) touched.push_back(block.first);
   }
 
   // The same whitened downdate as update(), with H assembled from blocks.

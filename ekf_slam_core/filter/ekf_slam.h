@@ -160,6 +160,15 @@ class EkfSlam {
   FilterStatus updateLines(const std::vector<LineObservation>& observations,
                            const std::vector<LineMatch>& matches,
                            std::vector<double>* nis = nullptr);
+  // For association: the innovation updateLines would use for `match`
+  // (the same linearisation, p-sign and θ-wrap resolved towards the
+  // prediction) and its covariance S = H P Hᵀ + R, 1 × 1 for a θ-only
+  // landmark without endpoints, else 2 × 2. On any status other than kOk
+  // (the one updateLines would refuse the match with) the outputs are
+  // untouched.
+  FilterStatus predictLineMatch(const LineObservation& observation, const LineMatch& match,
+                                Eigen::VectorXd* innovation,
+                                Eigen::MatrixXd* innovation_covariance) const;
   // Adds a line landmark: kLine (p, θ) with its 2 × 2 block, or kLineAngle
   // θ_f = θ + s_θ alone (thesis eqs. 4.44–4.47), cross-covariances from the
   // robot's rows.
@@ -256,6 +265,9 @@ class EkfSlam {
 
  private:
   void reserve(int dim);
+  struct LinearisedLine;
+  FilterStatus linearizeLineMatch(const LineObservation& observation, const LineMatch& match,
+                                  LinearisedLine* out) const;
   // The update's last step, shared by points and lines: x += W L⁻¹ ν and
   // the downdate P −= W Wᵀ of the lower triangle, W = P Hᵀ L⁻ᵀ.
   void applyGain(const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
