@@ -508,6 +508,19 @@ int main(int argc, char** argv) {
          << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
          << " as seen rarely, " << c.marginalised << " marginalised by max_landmarks)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
+         << "line landmarks (" << ekf_slam::toString(config.pipeline.landmarks) << "): "
+         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints
+                 ? std::string("none")
+                 : std::to_string(c.line_observations) +
+                       " segments offered, matched: " + std::to_string(c.line_matches) +
+                       ", ambiguous: " + std::to_string(c.line_ambiguous) +
+                       ", new: " + std::to_string(c.new_line_landmarks) +
+                       ", refused (non-finite): " + std::to_string(c.lines_refused) +
+                       ", update failures: " + std::to_string(c.line_update_failures) +
+                       ", average NIS: " +
+                       std::to_string(c.line_matches ? c.line_nis_sum / c.line_matches : 0.0) +
+                       ", in the map: " + std::to_string(pipeline.lineSupport().size()))
+         << "\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
          << (smoother.reassociated
