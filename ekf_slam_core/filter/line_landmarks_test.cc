@@ -195,6 +195,16 @@ TEST(LineLandmarks, BatchUpdateEqualsTheDenseEkfEquations) {
     const VectorXd x_expected = x0 + K * nu;
     const MatrixXd P_expected = (MatrixXd::Identity(n, n) - K * H) * P0;
 
+    // What association sees of each match is the update's linearisation.
+    for (int i = 0; i < 2; ++i) {
+      VectorXd innovation;
+      MatrixXd S_i;
+      ASSERT_EQ(filter.predictLineMatch(obs[i], matches[i], &innovation, &S_i), FilterStatus::kOk);
+      const int r = i == 1 && endpoints == 0 ? 1 : 2;
+      ASSERT_EQ(innovation.size(), r);
+      EXPECT_LT((innovation - nu.segment(2 * i, r)).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LT((S_i - S.block(2 * i, 2 * i, r, r)).cwiseAbs().maxCoeff(), 1e-12);
+    }
     std::vector<double> nis;
     ASSERT_EQ(filter.updateLines(obs, matches, &nis), FilterStatus::kOk) << endpoints;
     VectorXd dx = filter.state() - x_expected;

@@ -235,6 +235,9 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
     report.matches.clear();
     report.nis.clear();
   }
+  for (const LineMatch& m : report.matches) {
+    report.endpoint_matches += m.endpoint_ids[0] >= 0 || m.endpoint_ids[1] >= 0;
+  }
 
   // The point landmarks at each segment's two ends (θ-only landmarks).
   auto endsOf = [&](int observation, int ends[2]) {

@@ -79,6 +79,7 @@ struct LineIterationReport {
   int refused = 0;    // segments with a non-finite value or covariance
   int ambiguous = 0;  // between the gates, or lost the landmark to a better segment
   int augment_failures = 0;
+  int endpoint_matches = 0;  // θ-only matches whose offset came from endpoint points
   FilterStatus update_status = FilterStatus::kOk;
 };
 

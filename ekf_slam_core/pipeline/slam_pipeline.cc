@@ -354,6 +354,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     const LineIterationReport& lines = out->lines;
     counters_.line_observations += static_cast<long>(lines.observations.size());
     counters_.line_matches += static_cast<long>(lines.matches.size());
+    counters_.line_endpoint_matches += lines.endpoint_matches;
     counters_.line_ambiguous += lines.ambiguous;
     counters_.new_line_landmarks += static_cast<long>(lines.new_landmark_ids.size());
     counters_.lines_refused += lines.refused;

@@ -180,6 +180,7 @@ struct PipelineCounters {
   long new_landmarks = 0;
   long line_observations = 0;  // wall segments offered to the filter (after the length/range gate)
   long line_matches = 0;
+  long line_endpoint_matches = 0;  // of those: θ-only, the offset from endpoint points
   long line_ambiguous = 0;
   long new_line_landmarks = 0;
   long lines_refused = 0;                 // segments with non-finite values or covariance

@@ -512,7 +512,8 @@ int main(int argc, char** argv) {
          << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints
                  ? std::string("none")
                  : std::to_string(c.line_observations) +
-                       " segments offered, matched: " + std::to_string(c.line_matches) +
+                       " segments offered, matched: " + std::to_string(c.line_matches) + " (" +
+                       std::to_string(c.line_endpoint_matches) + " through endpoint points)" +
                        ", ambiguous: " + std::to_string(c.line_ambiguous) +
                        ", new: " + std::to_string(c.new_line_landmarks) +
                        ", refused (non-finite): " + std::to_string(c.lines_refused) +
