@@ -581,10 +581,19 @@ void EkfSlam::reanchor(const Pose2& robot_correction,
         rotation[1 + slot] << sign,
             sign * Vector2(-normal.y(), normal.x()).dot(correction.translation()), 0.0, 1.0;
         moved[1 + slot] = 1;
+        // The first estimate moves as the line, into the same coordinates.
+        Vector2& first = landmarks_[slot].first_estimate;
+        const double first_theta = first(1) + correction.theta;
+        const double first_p =
+            first(0) +
+            Vector2(std::cos(first_theta), std::sin(first_theta)).dot(correction.translation());
+        first = Vector2(sign * first_p, wrapAngle(sign < 0.0 ? first_theta + kPi : first_theta));
         break;
       }
       case LandmarkKind::kLineAngle:
         x_(i) = wrapAngle(x_(i) + correction.theta);
+        landmarks_[slot].first_estimate(1) =
+            wrapAngle(landmarks_[slot].first_estimate(1) + correction.theta);
         break;
     }
   }
@@ -699,6 +708,18 @@ FilterStatus EkfSlam::linearizeLineMatch(const LineObservation& obs, const LineM
                                 &H_line)) {
       return FilterStatus::kBadObservation;
     }
+    if (options_.first_estimate_jacobians) {
+      const Vector2& first = landmarks_[slot].first_estimate;
+      PolarLine at_first;
+      if (!predictLineObservation(robot, laser, PolarLine{first(0), first(1)}, &at_first,
+                                  &line.H_robot, &H_line)) {
+        return FilterStatus::kBadObservation;
+      }
+      if (std::abs(wrapAngle(at_first.theta - predicted.theta)) > 0.5 * kPi) {
+        line.H_robot.row(0) *= -1.0;
+        H_line.row(0) *= -1.0;
+      }
+    }
     line.blocks.emplace_back(slot, H_line);
   } else {
     int endpoints[2], count = 0;
@@ -738,6 +759,24 @@ FilterStatus EkfSlam::linearizeLineMatch(const LineObservation& obs, const LineM
                                                landmarkPosition(endpoints[1]), &predicted,
                                                &line.H_robot, &H_m1, &H_m2, &H_angle);
     if (!ok) return FilterStatus::kBadObservation;
+    if (options_.first_estimate_jacobians) {
+      const double theta_first = landmarks_[slot].first_estimate(1);
+      const Vector2& m1 = landmarks_[endpoints[0]].first_estimate;
+      PolarLine at_first;
+      const bool ok_first =
+          count == 1 ? predictLineFromAngleAndPoint(robot, laser, theta_first, m1, &at_first,
+                                                    &line.H_robot, &H_m1, &H_angle)
+                     : predictLineFromAngleAndEndpoints(
+                           robot, laser, theta_first, m1, landmarks_[endpoints[1]].first_estimate,
+                           &at_first, &line.H_robot, &H_m1, &H_m2, &H_angle);
+      if (!ok_first) return FilterStatus::kBadObservation;
+      if (std::abs(wrapAngle(at_first.theta - predicted.theta)) > 0.5 * kPi) {
+        line.H_robot.row(0) *= -1.0;
+        H_m1.row(0) *= -1.0;
+        if (count == 2) H_m2.row(0) *= -1.0;
+        H_angle(0) *= -1.0;
+      }
+    }
     Matrix2 angle_block = Matrix2::Zero();
     angle_block.col(0) = H_angle;
     line.blocks.emplace_back(slot, angle_block);
@@ -872,6 +911,9 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
     if (x_(i) >= 0.0) continue;
     x_(i) = -x_(i);
     x_(i + 1) = wrapAngle(x_(i + 1) + kPi);
+    // The first estimate follows into the new coordinates (signed p).
+    Vector2& first = landmarks_[slot].first_estimate;
+    first = Vector2(-first(0), wrapAngle(first(1) + kPi));
     // Negate row and column i of the lower triangle (the diagonal keeps its sign).
     P.block(i, 0, 1, i) *= -1.0;
     P.block(i + 1, i, n - i - 1, 1) *= -1.0;

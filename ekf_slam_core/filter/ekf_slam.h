@@ -103,8 +103,10 @@ struct LandmarkInfo {
   int observations = 0;     // the creating observation plus every accepted match
   long created_step = 0;    // filter step at augmentation
   long last_seen_step = 0;  // filter step of the last match
-  Vector2 first_estimate =
-      Vector2::Zero();  // point: position when created (first-estimates Jacobians)
+  // When created, for first-estimates Jacobians: a point's position, a
+  // line's (p, θ) (kept in the state's coordinates when p changes sign),
+  // a direction's (0, θ_f).
+  Vector2 first_estimate = Vector2::Zero();
 };
 
 struct PointMatch {
