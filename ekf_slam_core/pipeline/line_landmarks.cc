@@ -153,13 +153,13 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
       ++report.refused;
       continue;
     }
-    LineObservation obs;
-    obs.z = {line.p, line.theta};
-    obs.covariance = line.covariance;
     if (line.length() < options_.min_length ||
         (0.5 * (line.start + line.end)).norm() > options_.max_range) {
       continue;
     }
+    LineObservation obs;
+    obs.z = {line.p, line.theta};
+    obs.covariance = line.covariance;
     report.observations.push_back(obs);
     report.observation_line.push_back(l);
     segments.push_back(toMap(filter, line));
@@ -188,10 +188,15 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
       }
       Eigen::VectorXd innovation;
       Eigen::MatrixXd S;
-      if (filter.predictLineMatch(report.observations[i], c.match, &innovation, &S) !=
-          FilterStatus::kOk) {
-        continue;
+      FilterStatus status =
+          filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
+      if (status != FilterStatus::kOk && kind_ == LandmarkKind::kLineAngle) {
+        // Endpoints that no longer agree with the direction (θ_f beyond
+        // kMaxEndpointDisagreement from their line): the direction alone.
+        c.match.endpoint_ids[0] = c.match.endpoint_ids[1] = -1;
+        status = filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
       }
+      if (status != FilterStatus::kOk) continue;
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
       if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
       c.mahalanobis2 = innovation.dot(ldlt.solve(innovation));
