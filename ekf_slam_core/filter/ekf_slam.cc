@@ -629,10 +629,19 @@ void EkfSlam::reanchor(const Pose2& robot_correction,
         rotation[1 + slot] << sign,
             sign * Vector2(-normal.y(), normal.x()).dot(correction.translation()), 0.0, 1.0;
         moved[1 + slot] = 1;
+        // The first estimate moves as the line, into the same coordinates.
+        Vector2& first = landmarks_[slot].first_estimate;
+        const double first_theta = first(1) + correction.theta;
+        const double first_p =
+            first(0) +
+            Vector2(std::cos(first_theta), std::sin(first_theta)).dot(correction.translation());
+        first = Vector2(sign * first_p, wrapAngle(sign < 0.0 ? first_theta + kPi : first_theta));
         break;
       }
       case LandmarkKind::kLineAngle:
         x_(i) = wrapAngle(x_(i) + correction.theta);
+        landmarks_[slot].first_estimate(1) =
+            wrapAngle(landmarks_[slot].first_estimate(1) + correction.theta);
         break;
     }
   }
@@ -717,11 +726,9 @@ FilterStatus EkfSlam::augmentLine(const LineObservation& observation, LandmarkKi
   return FilterStatus::kOk;
 }
 
-namespace {
-
 // One linearised line measurement: `rows` (1 or 2) rows of innovation,
 // noise and Jacobian blocks on the robot and on landmark slots.
-struct LinearisedLine {
+struct EkfSlam::LinearisedLine {
   int rows = 2;
   Vector2 innovation = Vector2::Zero();
   Matrix2 noise = Matrix2::Zero();
@@ -729,7 +736,147 @@ struct LinearisedLine {
   std::vector<std::pair<int, Matrix2>> blocks;  // (slot, rows × landmark dim, top-left)
 };
 
-}  // namespace
+FilterStatus EkfSlam::linearizeLineMatch(const LineObservation& obs, const LineMatch& match,
+                                         LinearisedLine* out) const {
+  if (!obs.z.allFinite()) return FilterStatus::kNonFiniteInput;
+  if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+  const int slot = slotOf(match.landmark_id);
+  if (slot < 0) return FilterStatus::kUnknownLandmark;
+  const LandmarkKind kind = landmarks_[slot].kind;
+  if (kind == LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+  const Pose2 robot = pose();
+  const Pose2& laser = options_.laser_pose;
+  LinearisedLine& line = *out;
+  line = LinearisedLine();
+  line.noise = obs.covariance;
+  PolarLine predicted;
+  if (kind == LandmarkKind::kLine) {
+    Matrix2 H_line;
+    if (!predictLineObservation(robot, laser, lineLandmark(slot), &predicted, &line.H_robot,
+                                &H_line)) {
+      return FilterStatus::kBadObservation;
+    }
+    if (options_.first_estimate_jacobians) {
+      const Vector2& first = landmarks_[slot].first_estimate;
+      PolarLine at_first;
+      if (!predictLineObservation(robot, laser, PolarLine{first(0), first(1)}, &at_first,
+                                  &line.H_robot, &H_line)) {
+        return FilterStatus::kBadObservation;
+      }
+      if (std::abs(wrapAngle(at_first.theta - predicted.theta)) > 0.5 * kPi) {
+        line.H_robot.row(0) *= -1.0;
+        H_line.row(0) *= -1.0;
+      }
+    }
+    line.blocks.emplace_back(slot, H_line);
+  } else {
+    int endpoints[2], count = 0;
+    for (int e : match.endpoint_ids) {
+      if (e < 0) continue;
+      const int s = slotOf(e);
+      if (s < 0) return FilterStatus::kUnknownLandmark;
+      if (landmarks_[s].kind != LandmarkKind::kPoint) return FilterStatus::kBadObservation;
+      endpoints[count++] = s;
+    }
+    if (count == 2 && endpoints[0] == endpoints[1]) return FilterStatus::kBadObservation;
+    const double theta_f = lineAngle(slot);
+    if (count == 0) {  // θ alone, modulo π
+      double theta = 0.0, H_angle = 0.0;
+      RowVector3 H_r;
+      if (!predictLineAngle(robot, laser, theta_f, &theta, &H_r, &H_angle)) {
+        return FilterStatus::kBadObservation;
+      }
+      line.rows = 1;
+      line.innovation(0) = lineAngleDifference(obs.z.theta, theta);
+      line.noise = Matrix2::Zero();
+      line.noise(0, 0) = obs.covariance(1, 1);
+      line.H_robot.row(0) = H_r;
+      Matrix2 block = Matrix2::Zero();
+      block(0, 0) = H_angle;
+      line.blocks.emplace_back(slot, block);
+      return FilterStatus::kOk;
+    }
+    Matrix2 H_m1, H_m2;
+    Vector2 H_angle;
+    const bool ok =
+        count == 1
+            ? predictLineFromAngleAndPoint(robot, laser, theta_f, landmarkPosition(endpoints[0]),
+                                           &predicted, &line.H_robot, &H_m1, &H_angle)
+            : predictLineFromAngleAndEndpoints(robot, laser, theta_f,
+                                               landmarkPosition(endpoints[0]),
+                                               landmarkPosition(endpoints[1]), &predicted,
+                                               &line.H_robot, &H_m1, &H_m2, &H_angle);
+    if (!ok) return FilterStatus::kBadObservation;
+    if (options_.first_estimate_jacobians) {
+      const double theta_first = landmarks_[slot].first_estimate(1);
+      const Vector2& m1 = landmarks_[endpoints[0]].first_estimate;
+      PolarLine at_first;
+      const bool ok_first =
+          count == 1 ? predictLineFromAngleAndPoint(robot, laser, theta_first, m1, &at_first,
+                                                    &line.H_robot, &H_m1, &H_angle)
+                     : predictLineFromAngleAndEndpoints(
+                           robot, laser, theta_first, m1, landmarks_[endpoints[1]].first_estimate,
+                           &at_first, &line.H_robot, &H_m1, &H_m2, &H_angle);
+      if (!ok_first) return FilterStatus::kBadObservation;
+      if (std::abs(wrapAngle(at_first.theta - predicted.theta)) > 0.5 * kPi) {
+        line.H_robot.row(0) *= -1.0;
+        H_m1.row(0) *= -1.0;
+        if (count == 2) H_m2.row(0) *= -1.0;
+        H_angle(0) *= -1.0;
+      }
+    }
+    Matrix2 angle_block = Matrix2::Zero();
+    angle_block.col(0) = H_angle;
+    line.blocks.emplace_back(slot, angle_block);
+    line.blocks.emplace_back(endpoints[0], H_m1);
+    if (count == 2) line.blocks.emplace_back(endpoints[1], H_m2);
+  }
+  // ν = z − ẑ with the p-sign and θ-wrap ambiguity resolved towards ẑ;
+  // ∂ν/∂ẑ = −flip, so the measurement Jacobian is flip · H.
+  Matrix2 J;
+  if (!lineInnovation(obs.z, predicted, &line.innovation, &J)) {
+    return FilterStatus::kBadObservation;
+  }
+  const Matrix2 flip = -J;
+  line.H_robot = flip * line.H_robot;
+  for (auto& block : line.blocks) block.second = flip * block.second;
+  return FilterStatus::kOk;
+}
+
+FilterStatus EkfSlam::predictLineMatch(const LineObservation& observation, const LineMatch& match,
+                                       Eigen::VectorXd* innovation,
+                                       Eigen::MatrixXd* innovation_covariance) const {
+  LinearisedLine line;
+  const FilterStatus status = linearizeLineMatch(observation, match, &line);
+  if (status != FilterStatus::kOk) return status;
+  // H over the few state entries it touches; P read from its lower
+  // triangle, which is current everywhere.
+  std::vector<int> index = {0, 1, 2};
+  for (const auto& block : line.blocks) {
+    const int start = landmarkIndex(block.first);
+    for (int d = 0; d < landmarkDim(landmarks_[block.first].kind); ++d) index.push_back(start + d);
+  }
+  const int m = static_cast<int>(index.size());
+  const int r = line.rows;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(r, m);
+  H.leftCols<3>() = line.H_robot.topRows(r);
+  int column = kPoseDim;
+  for (const auto& [slot, block] : line.blocks) {
+    const int d = landmarkDim(landmarks_[slot].kind);
+    H.middleCols(column, d) = block.topLeftCorner(r, d);
+    column += d;
+  }
+  Eigen::MatrixXd P(m, m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) {
+      const int i = std::max(index[a], index[b]), j = std::min(index[a], index[b]);
+      P(a, b) = P_(i, j);
+    }
+  }
+  *innovation = line.innovation.head(r);
+  *innovation_covariance = H * P * H.transpose() + line.noise.topLeftCorner(r, r);
+  return FilterStatus::kOk;
+}
 
 FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observations,
                                   const std::vector<LineMatch>& matches, std::vector<double>* nis) {
@@ -742,90 +889,18 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
   std::vector<LinearisedLine> lines(k);
   std::vector<char> line_used(landmarkCount(), 0);
   std::vector<int> touched;
-  const Pose2 robot = pose();
-  const Pose2& laser = options_.laser_pose;
   for (int i = 0; i < k; ++i) {
     const LineMatch& match = matches[i];
     if (match.observation < 0 || match.observation >= static_cast<int>(observations.size())) {
       return FilterStatus::kBadObservation;
     }
-    const LineObservation& obs = observations[match.observation];
-    if (!obs.z.allFinite()) return FilterStatus::kNonFiniteInput;
-    if (!isValidCovariance2(obs.covariance)) return FilterStatus::kSingularInnovation;
+    const FilterStatus status =
+        linearizeLineMatch(observations[match.observation], match, &lines[i]);
+    if (status != FilterStatus::kOk) return status;
     const int slot = slotOf(match.landmark_id);
-    if (slot < 0) return FilterStatus::kUnknownLandmark;
-    const LandmarkKind kind = landmarks_[slot].kind;
-    if (kind == LandmarkKind::kPoint || line_used[slot]) return FilterStatus::kBadObservation;
+    if (line_used[slot]) return FilterStatus::kBadObservation;
     line_used[slot] = 1;
-    touched.push_back(slot);
-    LinearisedLine& line = lines[i];
-    line.noise = obs.covariance;
-    PolarLine predicted;
-    Matrix2 flip = Matrix2::Identity();  // innovation's sign convention for the p row
-    if (kind == LandmarkKind::kLine) {
-      Matrix2 H_line;
-      if (!predictLineObservation(robot, laser, lineLandmark(slot), &predicted, &line.H_robot,
-                                  &H_line)) {
-        return FilterStatus::kBadObservation;
-      }
-      line.blocks.emplace_back(slot, H_line);
-    } else {
-      int endpoints[2], count = 0;
-      for (int e : match.endpoint_ids) {
-        if (e < 0) continue;
-        const int s = slotOf(e);
-        if (s < 0) return FilterStatus::kUnknownLandmark;
-        if (landmarks_[s].kind != LandmarkKind::kPoint) return FilterStatus::kBadObservation;
-        endpoints[count++] = s;
-      }
-      if (count == 2 && endpoints[0] == endpoints[1]) return FilterStatus::kBadObservation;
-      const double theta_f = lineAngle(slot);
-      if (count == 0) {  // θ alone, modulo π
-        double theta = 0.0, H_angle = 0.0;
-        RowVector3 H_r;
-        if (!predictLineAngle(robot, laser, theta_f, &theta, &H_r, &H_angle)) {
-          return FilterStatus::kBadObservation;
-        }
-        line.rows = 1;
-        line.innovation(0) = lineAngleDifference(obs.z.theta, theta);
-        line.noise = Matrix2::Zero();
-        line.noise(0, 0) = obs.covariance(1, 1);
-        line.H_robot.row(0) = H_r;
-        Matrix2 block = Matrix2::Zero();
-        block(0, 0) = H_angle;
-        line.blocks.emplace_back(slot, block);
-        continue;
-      }
-      Matrix2 H_m1, H_m2;
-      Vector2 H_angle;
-      const bool ok =
-          count == 1
-              ? predictLineFromAngleAndPoint(robot, laser, theta_f, landmarkPosition(endpoints[0]),
-                                             &predicted, &line.H_robot, &H_m1, &H_angle)
-              : predictLineFromAngleAndEndpoints(robot, laser, theta_f,
-                                                 landmarkPosition(endpoints[0]),
-                                                 landmarkPosition(endpoints[1]), &predicted,
-                                                 &line.H_robot, &H_m1, &H_m2, &H_angle);
-      if (!ok) return FilterStatus::kBadObservation;
-      Matrix2 angle_block = Matrix2::Zero();
-      angle_block.col(0) = H_angle;
-      line.blocks.emplace_back(slot, angle_block);
-      line.blocks.emplace_back(endpoints[0], H_m1);
-      touched.push_back(endpoints[0]);
-      if (count == 2) {
-        line.blocks.emplace_back(endpoints[1], H_m2);
-        touched.push_back(endpoints[1]);
-      }
-    }
-    // ν = z − ẑ with the p-sign and θ-wrap ambiguity resolved towards ẑ;
-    // ∂ν/∂ẑ = −flip, so the measurement Jacobian is flip · H.
-    Matrix2 J;
-    if (!lineInnovation(obs.z, predicted, &line.innovation, &J)) {
-      return FilterStatus::kBadObservation;
-    }
-    flip = -J;
-    line.H_robot = flip * line.H_robot;
-    for (auto& block : line.blocks) block.second = flip * block.second;
+    for (const auto& block : lines[i].blocks) touched.push_back(block.first);
   }
 
   // The same whitened downdate as update(), with H assembled from blocks.
@@ -884,6 +959,9 @@ FilterStatus EkfSlam::updateLines(const std::vector<LineObservation>& observatio
     if (x_(i) >= 0.0) continue;
     x_(i) = -x_(i);
     x_(i + 1) = wrapAngle(x_(i + 1) + kPi);
+    // The first estimate follows into the new coordinates (signed p).
+    Vector2& first = landmarks_[slot].first_estimate;
+    first = Vector2(-first(0), wrapAngle(first(1) + kPi));
     // Negate row and column i of the lower triangle (the diagonal keeps its sign).
     P.block(i, 0, 1, i) *= -1.0;
     P.block(i + 1, i, n - i - 1, 1) *= -1.0;

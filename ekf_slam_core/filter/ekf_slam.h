@@ -103,8 +103,10 @@ struct LandmarkInfo {
   int observations = 0;     // the creating observation plus every accepted match
   long created_step = 0;    // filter step at augmentation
   long last_seen_step = 0;  // filter step of the last match
-  Vector2 first_estimate =
-      Vector2::Zero();  // point: position when created (first-estimates Jacobians)
+  // When created, for first-estimates Jacobians: a point's position, a
+  // line's (p, θ) (kept in the state's coordinates when p changes sign),
+  // a direction's (0, θ_f).
+  Vector2 first_estimate = Vector2::Zero();
 };
 
 struct PointMatch {
@@ -172,6 +174,15 @@ class EkfSlam {
   FilterStatus updateLines(const std::vector<LineObservation>& observations,
                            const std::vector<LineMatch>& matches,
                            std::vector<double>* nis = nullptr);
+  // For association: the innovation updateLines would use for `match`
+  // (the same linearisation, p-sign and θ-wrap resolved towards the
+  // prediction) and its covariance S = H P Hᵀ + R, 1 × 1 for a θ-only
+  // landmark without endpoints, else 2 × 2. On any status other than kOk
+  // (the one updateLines would refuse the match with) the outputs are
+  // untouched.
+  FilterStatus predictLineMatch(const LineObservation& observation, const LineMatch& match,
+                                Eigen::VectorXd* innovation,
+                                Eigen::MatrixXd* innovation_covariance) const;
   // Adds a line landmark: kLine (p, θ) with its 2 × 2 block, or kLineAngle
   // θ_f = θ + s_θ alone (thesis eqs. 4.44–4.47), cross-covariances from the
   // robot's rows.
@@ -291,6 +302,9 @@ class EkfSlam {
 
  private:
   void reserve(int dim);
+  struct LinearisedLine;
+  FilterStatus linearizeLineMatch(const LineObservation& observation, const LineMatch& match,
+                                  LinearisedLine* out) const;
   // The update's last step, shared by points and lines: x += W L⁻¹ ν and
   // the downdate P −= W Wᵀ of the lower triangle, W = P Hᵀ L⁻ᵀ.
   void applyGain(const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,

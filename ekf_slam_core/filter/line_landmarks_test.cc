@@ -195,6 +195,16 @@ TEST(LineLandmarks, BatchUpdateEqualsTheDenseEkfEquations) {
     const VectorXd x_expected = x0 + K * nu;
     const MatrixXd P_expected = (MatrixXd::Identity(n, n) - K * H) * P0;
 
+    // What association sees of each match is the update's linearisation.
+    for (int i = 0; i < 2; ++i) {
+      VectorXd innovation;
+      MatrixXd S_i;
+      ASSERT_EQ(filter.predictLineMatch(obs[i], matches[i], &innovation, &S_i), FilterStatus::kOk);
+      const int r = i == 1 && endpoints == 0 ? 1 : 2;
+      ASSERT_EQ(innovation.size(), r);
+      EXPECT_LT((innovation - nu.segment(2 * i, r)).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LT((S_i - S.block(2 * i, 2 * i, r, r)).cwiseAbs().maxCoeff(), 1e-12);
+    }
     std::vector<double> nis;
     ASSERT_EQ(filter.updateLines(obs, matches, &nis), FilterStatus::kOk) << endpoints;
     VectorXd dx = filter.state() - x_expected;
@@ -206,6 +216,51 @@ TEST(LineLandmarks, BatchUpdateEqualsTheDenseEkfEquations) {
     EXPECT_NEAR(nis[0], nu.head<2>().dot(S.topLeftCorner(2, 2).ldlt().solve(nu.head<2>())), 1e-9);
     EXPECT_TRUE(isSymmetricPositiveDefinite(filter.covariance()));
   }
+}
+
+// With first-estimates Jacobians a line's H is taken at the landmark's
+// estimate when it was created, its innovation at the current one.
+TEST(LineLandmarks, FirstEstimateJacobiansLineariseLinesAtTheirFirstEstimate) {
+  sim::LandmarkSimOptions sim_options;
+  const Pose2& laser = sim_options.laser_pose;
+  FilterOptions options = optionsFor(sim_options);
+  options.first_estimate_jacobians = true;
+  EkfSlam filter(options, Pose2(), Matrix3::Identity() * 1e-3);
+  std::mt19937 rng(5);
+  int id = -1;
+  ASSERT_EQ(
+      filter.augmentLine(noisyWall(Pose2(), laser, roomWalls()[1], &rng), LandmarkKind::kLine, &id),
+      FilterStatus::kOk);
+  const Vector2 first = filter.landmarks()[filter.slotOf(id)].first_estimate;
+  const Pose2 truth(0.3, 0.05, 0.1);
+  ASSERT_EQ(filter.predict(Pose2(), truth, 0.2), FilterStatus::kOk);
+  const std::vector<LineObservation> obs = {noisyWall(truth, laser, roomWalls()[1], &rng)};
+  ASSERT_EQ(filter.updateLines(obs, {{0, id}}), FilterStatus::kOk);
+  const int slot = filter.slotOf(id);
+  ASSERT_GT((filter.lineLandmark(slot).vector() - first).norm(), 1e-4);  // it has moved
+  EXPECT_EQ(filter.landmarks()[slot].first_estimate, first);
+
+  const Pose2 next(0.6, 0.1, 0.2);
+  ASSERT_EQ(filter.predict(truth, next, 0.2), FilterStatus::kOk);
+  const LineObservation seen = noisyWall(next, laser, roomWalls()[1], &rng);
+  VectorXd innovation;
+  MatrixXd S;
+  ASSERT_EQ(filter.predictLineMatch(seen, {0, id}, &innovation, &S), FilterStatus::kOk);
+  PolarLine z_now, z_first;
+  Matrix23 Hr;
+  Matrix2 Hl, J;
+  Vector2 nu;
+  ASSERT_TRUE(predictLineObservation(filter.pose(), laser, filter.lineLandmark(slot), &z_now));
+  ASSERT_TRUE(lineInnovation(seen.z, z_now, &nu, &J));
+  ASSERT_TRUE(predictLineObservation(filter.pose(), laser, PolarLine{first(0), first(1)}, &z_first,
+                                     &Hr, &Hl));
+  const int n = filter.stateDim();
+  MatrixXd H = MatrixXd::Zero(2, n);
+  H.leftCols<3>() = -J * Hr;
+  H.block<2, 2>(0, filter.landmarkIndex(slot)) = -J * Hl;
+  const MatrixXd S_expected = H * filter.covariance() * H.transpose() + seen.covariance;
+  EXPECT_LT((innovation - nu).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((S - S_expected).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(LineLandmarks, BadMatchesAreRefusedAndTheStateIsUnchanged) {

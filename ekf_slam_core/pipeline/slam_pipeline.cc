@@ -70,6 +70,20 @@ bool usableOdometry(const Pose2& odometry) {
 }
 
 namespace {
+std::unique_ptr<LineLandmarks> lineLandmarksFor(const PipelineOptions& options) {
+  switch (options.landmarks) {
+    case LandmarkSet::kPoints:
+      return nullptr;
+    case LandmarkSet::kPointsAndLines:
+      return std::make_unique<LineLandmarks>(LandmarkKind::kLine, options.lines,
+                                             options.association);
+    case LandmarkSet::kPointsAndLineAngles:
+      return std::make_unique<LineLandmarks>(LandmarkKind::kLineAngle, options.lines,
+                                             options.association);
+  }
+  return nullptr;
+}
+
 FilterOptions filterOptionsFor(const PipelineOptions& options) {
   FilterOptions filter = options.filter;
   if (options.scan_matching.enabled) filter.motion_noise = options.scan_matched_motion_noise;
@@ -87,6 +101,7 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
                     ? std::make_unique<LoopClosureBackEnd>(
                           options.loop_closure, options.scan_matching, options.back_end_thread)
                     : nullptr),
+      lines_(lineLandmarksFor(options)),
       filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance) {
   full_recorder_.setPrior(options.initial_pose, options.initial_pose_covariance);
 }
@@ -136,6 +151,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
       pending_filtered_.push_back(out.pose);
       for (int id : out.iteration.new_landmark_ids) landmark_scan_[id] = loop_scan;
+      for (int id : out.lines.new_landmark_ids) landmark_scan_[id] = loop_scan;
       view_ = back_end_->addScan(stamp, *scan, options_.filter.laser_pose, odometry, usable);
       const Pose2 graph_pose = view_->poseOf(odometry);
       if (!have_map_from_graph_) {
@@ -319,6 +335,9 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   }
   out->iteration.predict_status = FilterStatus::kOk;
   observe(filter_, options_.association, out->observations, &out->iteration);
+  if (lines_) {
+    lines_->observe(filter_, out->features, out->observation_feature, out->iteration, &out->lines);
+  }
   recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
   full_recorder_.addIteration(stamp, filter_, predict ? &control : nullptr, out->observations,
                               out->iteration);
@@ -330,6 +349,18 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   counters_.pruned += out->iteration.pruned;
   counters_.pruned_rare += pruneRarelySeen();
   counters_.marginalised += boundLandmarks();
+  if (lines_) {
+    lines_->synchronise(filter_);
+    const LineIterationReport& lines = out->lines;
+    counters_.line_observations += static_cast<long>(lines.observations.size());
+    counters_.line_matches += static_cast<long>(lines.matches.size());
+    counters_.line_endpoint_matches += lines.endpoint_matches;
+    counters_.line_ambiguous += lines.ambiguous;
+    counters_.new_line_landmarks += static_cast<long>(lines.new_landmark_ids.size());
+    counters_.lines_refused += lines.refused;
+    if (lines.update_status != FilterStatus::kOk) ++counters_.line_update_failures;
+    for (double nis : lines.nis) counters_.line_nis_sum += nis;
+  }
   for (const ObservationAssociation& a : out->iteration.association.observations) {
     if (a.decision == AssociationDecision::kAmbiguous) ++counters_.ambiguous;
   }
@@ -370,6 +401,15 @@ int SlamPipeline::boundLandmarks() {
   ids.reserve(excess);
   for (int i = 0; i < excess; ++i) ids.push_back(order[i]->id);
   return filter_.removeLandmarks(ids);
+}
+
+const std::unordered_map<int, LineSupport>& SlamPipeline::lineSupport() const {
+  static const std::unordered_map<int, LineSupport> kNone;
+  return lines_ ? lines_->support() : kNone;
+}
+
+void SlamPipeline::seedLineSupport(const std::unordered_map<int, LineSupport>& support) {
+  if (lines_) lines_->seed(filter_, support);
 }
 
 std::vector<StampedPose> SlamPipeline::filteredScanPoses() const {
@@ -418,6 +458,10 @@ void SlamPipeline::reanchorFilter(const Pose2& causal, const Pose2& published) {
     corrections.emplace_back(info.id, compose(key_map[k], inverse(key_filtered_[k])));
   }
   filter_.reanchor(compose(causal, inverse(published)), corrections);
+  if (lines_) {
+    lines_->reanchor(corrections);
+    lines_->synchronise(filter_);
+  }
   key_filtered_ = std::move(key_map);
   ++counters_.reanchors;
 }

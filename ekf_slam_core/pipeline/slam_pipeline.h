@@ -34,6 +34,7 @@
 #include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/back_end.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
+#include "ekf_slam_core/pipeline/line_landmarks.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/full_smoother.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
@@ -85,6 +86,13 @@ struct PipelineOptions {
   // with the building (an iteration at 100 landmarks: about 0.1 ms). 0:
   // no bound.
   int max_landmarks = 100;
+  // Which features become landmarks: the point features alone, or also the
+  // extractor's wall segments as (p, θ) lines or as θ-only lines whose
+  // offset comes from the point landmarks at their ends (line_landmarks.h).
+  // Lines share the points' association gates and pruning policy, and the
+  // landmark bound.
+  LandmarkSet landmarks = LandmarkSet::kPoints;
+  LineLandmarkOptions lines;
   // Control source. With scan_matching.enabled every scan is first aligned to
   // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
   // the place of the raw odometry pose everywhere below: the filter's control
@@ -114,6 +122,11 @@ struct PipelineOptions {
     v.integer("prune_min_observations", prune_min_observations, Bounds::closed(0, 1e6));
     v.integer("prune_age_steps", prune_age_steps, Bounds::closed(1, 1e8, "iterations"));
     v.integer("max_landmarks", max_landmarks, Bounds::closed(0, 1e6));
+    v.choice("landmarks", landmarks,
+             {{LandmarkSet::kPoints, "points"},
+              {LandmarkSet::kPointsAndLines, "points+lines"},
+              {LandmarkSet::kPointsAndLineAngles, "points+lines_theta"}});
+    v.section("lines", lines);
   }
 
   static MotionNoiseOptions defaultScanMatchedMotionNoise();
@@ -147,6 +160,7 @@ struct ScanResult {
   std::vector<int>
       observation_feature;    // per observation: its index in features.points_of_interest
   IterationReport iteration;  // association, NIS, new landmarks (when iterated)
+  LineIterationReport lines;  // the line landmarks' part of it (landmarks other than points)
   std::string message;        // why a scan was not iterated, for the log
 };
 
@@ -164,6 +178,14 @@ struct PipelineCounters {
   long matches = 0;
   long ambiguous = 0;  // between the gates, or lost to a better observation
   long new_landmarks = 0;
+  long line_observations = 0;  // wall segments offered to the filter (after the length/range gate)
+  long line_matches = 0;
+  long line_endpoint_matches = 0;  // of those: θ-only, the offset from endpoint points
+  long line_ambiguous = 0;
+  long new_line_landmarks = 0;
+  long lines_refused = 0;                 // segments with non-finite values or covariance
+  long line_update_failures = 0;          // iterations whose line update was refused
+  double line_nis_sum = 0.0;              // over all line matches
   long pruned = 0;                        // tentative landmarks removed
   long pruned_rare = 0;                   // landmarks removed by prune_min_observations
   long marginalised = 0;                  // landmarks dropped by the max_landmarks bound
@@ -220,6 +242,13 @@ class SlamPipeline {
   const PipelineCounters& counters() const { return counters_; }
   const std::vector<ScanRecord>& scans() const { return records_; }
   const TrajectoryRecorder& iterations() const { return recorder_; }
+  // Per line landmark id: the stretch of the line seen so far and, for a
+  // θ-only landmark, its endpoint point landmarks. Empty with points only.
+  const std::unordered_map<int, LineSupport>& lineSupport() const;
+  // The extents and endpoint ids of line landmarks seeded into the filter
+  // from a map file (seedFilter, before the first scan); ignored when the
+  // pipeline uses no lines.
+  void seedLineSupport(const std::unordered_map<int, LineSupport>& support);
 
   // map → odom, so that map → odom → base_link is the estimate at the last
   // iteration, with odom → base_link the robot's raw odometry.
@@ -286,6 +315,7 @@ class SlamPipeline {
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
   std::unique_ptr<LoopClosureBackEnd> back_end_;        // null when loop closure is off
+  std::unique_ptr<LineLandmarks> lines_;                // null with points only
   std::shared_ptr<const BackEndView> view_;             // the back end as the last scan saw it
   long loops_seen_ = 0;                                 // accepted loops in that view
   EkfSlam filter_;

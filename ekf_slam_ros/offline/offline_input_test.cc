@@ -109,6 +109,7 @@ map: {resolution: fine}
 scan_matching: {map_mode: everything, motion_noise: {min_rot_sigma: -0.1}}
 smoother: {observation_kernel: tukey, reassociation_gate_probability: 1.5}
 features: {point_model_sigma: -0.01}
+pipeline: {landmarks: lines, lines: {overlap_margin: -1}}
 )"),
                                            &config);
   for (const char* expected :
@@ -120,7 +121,9 @@ features: {point_model_sigma: -0.01}
         "scan_matching.motion_noise.min_rot_sigma: must be >= 0 (rad), got -0.1",
         "smoother.observation_kernel: must be one of none, huber, cauchy",
         "smoother.reassociation_gate_probability: must be in (0, 1), got 1.5",
-        "features.point_model_sigma: must be in [0, 1] (m), got -0.01"}) {
+        "features.point_model_sigma: must be in [0, 1] (m), got -0.01",
+        "pipeline.landmarks: must be one of points, points+lines, points+lines_theta",
+        "pipeline.lines.overlap_margin: must be >= 0 (m), got -1"}) {
     EXPECT_NE(error.find(expected), std::string::npos) << "missing '" << expected << "' in:\n"
                                                        << error;
   }

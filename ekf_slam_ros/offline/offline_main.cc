@@ -417,10 +417,11 @@ int main(int argc, char** argv) {
   // The final trajectory: loop-closed when loop closure is on, else smoothed.
   const std::vector<ekf_slam::StampedPose>& final_poses = optimized.empty() ? smoothed : optimized;
   if (error.empty()) {
-    // The same file as the live node's save_map; the lines' extents and
-    // endpoints join it once the pipeline keeps line support.
-    error = ekf_slam::writeLandmarkMap(out_dir + "/landmarks.yaml",
-                                       ekf_slam::toLandmarkMapFile(pipeline.filter(), {}, "map"));
+    // The same file as the live node's save_map, line extents and
+    // endpoints included.
+    error = ekf_slam::writeLandmarkMap(
+        out_dir + "/landmarks.yaml",
+        ekf_slam::toLandmarkMapFile(pipeline.filter(), pipeline.lineSupport(), "map"));
   }
   if (error.empty()) {
     error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, final_poses,
@@ -499,6 +500,20 @@ int main(int argc, char** argv) {
          << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
          << " as seen rarely, " << c.marginalised << " marginalised by max_landmarks)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
+         << "line landmarks (" << ekf_slam::toString(config.pipeline.landmarks) << "): "
+         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints
+                 ? std::string("none")
+                 : std::to_string(c.line_observations) +
+                       " segments offered, matched: " + std::to_string(c.line_matches) + " (" +
+                       std::to_string(c.line_endpoint_matches) + " through endpoint points)" +
+                       ", ambiguous: " + std::to_string(c.line_ambiguous) +
+                       ", new: " + std::to_string(c.new_line_landmarks) +
+                       ", refused (non-finite): " + std::to_string(c.lines_refused) +
+                       ", update failures: " + std::to_string(c.line_update_failures) +
+                       ", average NIS: " +
+                       std::to_string(c.line_matches ? c.line_nis_sum / c.line_matches : 0.0) +
+                       ", in the map: " + std::to_string(pipeline.lineSupport().size()))
+         << "\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
          << (smoother.reassociated

@@ -138,9 +138,9 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   }
   pipeline_ = std::make_unique<SlamPipeline>(options);
   if (seed_map_) {
-    // Without a support to fill (the pipeline keeps none yet), the loaded
-    // lines' extents and θ-only lines' endpoints are not used.
-    const int refused = seedFilter(*seed_map_, &pipeline_->mutableFilter());
+    std::unordered_map<int, LineSupport> support;
+    const int refused = seedFilter(*seed_map_, &pipeline_->mutableFilter(), &support);
+    pipeline_->seedLineSupport(support);
     if (refused > 0) ROS_WARN("ekf_slam_node: %d landmarks of the loaded map refused", refused);
     seed_map_.reset();
   }

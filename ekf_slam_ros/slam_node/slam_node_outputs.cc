@@ -18,10 +18,8 @@ using ros_conversions::toPoseMessage;
 }  // namespace
 
 const std::unordered_map<int, LineSupport>& SlamNode::lineSupport() const {
-  // Empty until the pipeline keeps line support: lines are then saved
-  // without an extent and θ-only lines without endpoints.
   static const std::unordered_map<int, LineSupport> kNone;
-  return kNone;
+  return pipeline_ ? pipeline_->lineSupport() : kNone;
 }
 
 void SlamNode::publishLandmarkMap(const std_msgs::Header& header) {

@@ -1,0 +1,392 @@
+#include "ekf_slam_core/pipeline/line_landmarks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ekf_slam_core/filter/chi_square.h"
+
+namespace ekf_slam {
+
+const char* toString(LandmarkSet set) {
+  switch (set) {
+    case LandmarkSet::kPoints:
+      return "points";
+    case LandmarkSet::kPointsAndLines:
+      return "points+lines";
+    case LandmarkSet::kPointsAndLineAngles:
+      return "points+lines_theta";
+  }
+  return "unknown";
+}
+
+namespace {
+
+Vector2 direction(double theta) { return Vector2(-std::sin(theta), std::cos(theta)); }
+
+bool finiteLine(const LineFeature& line) {
+  return std::isfinite(line.p) && std::isfinite(line.theta) && line.covariance.allFinite() &&
+         line.start.allFinite() && line.end.allFinite();
+}
+
+struct Candidate {
+  int observation = -1;
+  int landmark_id = -1;
+  LineMatch match;
+  double mahalanobis2 = 0.0;
+  double score = 0.0;  // d² + ln|S|
+};
+
+}  // namespace
+
+LineLandmarks::LineLandmarks(LandmarkKind kind, const LineLandmarkOptions& options,
+                             const AssociationOptions& association)
+    : kind_(kind), options_(options), association_(association) {}
+
+LineLandmarks::Segment LineLandmarks::toMap(const EkfSlam& filter, const LineFeature& line) const {
+  const Pose2 sensor = compose(filter.pose(), filter.options().laser_pose);
+  return {transformFrom(sensor, line.start), transformFrom(sensor, line.end)};
+}
+
+double LineLandmarks::landmarkTheta(const EkfSlam& filter, int slot) const {
+  return filter.landmarkKind(slot) == LandmarkKind::kLine ? filter.lineLandmark(slot).theta
+                                                          : filter.lineAngle(slot);
+}
+
+bool LineLandmarks::overlaps(const EkfSlam& filter, int slot, const Track& track,
+                             const Segment& s) const {
+  const Vector2 d = direction(landmarkTheta(filter, slot));
+  const double seen_a = d.dot(track.first), seen_b = d.dot(track.last);
+  const double seg_a = d.dot(s.a), seg_b = d.dot(s.b);
+  return std::max(seg_a, seg_b) >= std::min(seen_a, seen_b) - options_.overlap_margin &&
+         std::min(seg_a, seg_b) <= std::max(seen_a, seen_b) + options_.overlap_margin;
+}
+
+double LineLandmarks::offsetVariance(const EkfSlam& filter,
+                                     const LineObservation& observation) const {
+  PolarLine line;
+  Matrix23 G_robot;
+  Matrix2 G_z, covariance;
+  if (!lineLandmarkFromObservation(filter.pose(), filter.options().laser_pose, observation.z, &line,
+                                   &G_robot, &G_z) ||
+      !newLineLandmarkCovariance(filter.poseCovariance(), observation.covariance, G_robot, G_z,
+                                 &covariance)) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return covariance(0, 0);
+}
+
+bool LineLandmarks::offsetCompatible(const EkfSlam& filter, int slot, const Track& track,
+                                     const LineObservation& observation, double* d2) const {
+  PolarLine seen;
+  if (!lineLandmarkFromObservation(filter.pose(), filter.options().laser_pose, observation.z,
+                                   &seen)) {
+    return false;
+  }
+  const double theta = filter.lineAngle(slot);
+  const Vector2 normal(std::cos(theta), std::sin(theta));
+  // The sighting's offset along the landmark's normal (its normal may point
+  // the other way: θ-only landmarks are compared modulo π).
+  const double offset = std::cos(seen.theta - theta) >= 0.0 ? seen.p : -seen.p;
+  const double variance = offsetVariance(filter, observation) + track.latest_offset_variance;
+  if (!(variance > 0.0) || !std::isfinite(variance)) return false;
+  const double difference = offset - normal.dot(track.latest_mid);
+  *d2 = difference * difference / variance;
+  return *d2 <= chiSquareQuantile(association_.new_landmark_probability, 1.0);
+}
+
+void LineLandmarks::remember(const EkfSlam& filter, int id, const LineObservation& observation,
+                             const Segment& segment, bool extend) {
+  Track& track = tracks_[id];
+  if (!extend) {
+    track.first = segment.a;
+    track.last = segment.b;
+  } else {
+    const int slot = filter.slotOf(id);
+    const Vector2 d = direction(landmarkTheta(filter, slot));
+    Vector2 lo = track.first, hi = track.last;
+    if (d.dot(lo) > d.dot(hi)) std::swap(lo, hi);
+    for (const Vector2& q : {segment.a, segment.b}) {
+      if (d.dot(q) < d.dot(lo)) lo = q;
+      if (d.dot(q) > d.dot(hi)) hi = q;
+    }
+    track.first = lo;
+    track.last = hi;
+  }
+  track.latest_mid = 0.5 * (segment.a + segment.b);
+  track.latest_offset_variance = offsetVariance(filter, observation);
+}
+
+void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
+                            const std::vector<int>& observation_feature,
+                            const IterationReport& points, LineIterationReport* out) {
+  LineIterationReport& report = *out;
+  // Point merges of this scan: endpoint ids follow their survivors.
+  for (const auto& [kept, dropped] : points.merged) {
+    for (auto& entry : tracks_) {
+      for (int& e : entry.second.endpoint_ids) {
+        if (e == dropped) e = kept;
+      }
+    }
+  }
+
+  // The scan's point landmarks by feature index, for the segments' ends.
+  std::unordered_map<int, int> landmark_of_feature;
+  auto survivor = [&](int id) {
+    for (const auto& [kept, dropped] : points.merged) {
+      if (dropped == id) id = kept;
+    }
+    return id;
+  };
+  for (const PointMatch& m : points.matches) {
+    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
+  }
+  for (const PointMatch& m : points.created) {
+    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
+  }
+
+  // Gate the segments.
+  std::vector<Segment> segments;
+  for (int l = 0; l < static_cast<int>(features.lines.size()); ++l) {
+    const LineFeature& line = features.lines[l];
+    if (!finiteLine(line)) {
+      ++report.refused;
+      continue;
+    }
+    if (line.length() < options_.min_length ||
+        (0.5 * (line.start + line.end)).norm() > options_.max_range) {
+      continue;
+    }
+    LineObservation obs;
+    obs.z = {line.p, line.theta};
+    obs.covariance = line.covariance;
+    report.observations.push_back(obs);
+    report.observation_line.push_back(l);
+    segments.push_back(toMap(filter, line));
+  }
+  const int count = static_cast<int>(report.observations.size());
+
+  // Individual compatibility with every overlapping landmark of our kind.
+  const double gate2 = chiSquareQuantile(association_.gate_probability, 2.0);
+  const double gate1 = chiSquareQuantile(association_.gate_probability, 1.0);
+  const double new_gate2 = chiSquareQuantile(association_.new_landmark_probability, 2.0);
+  const double new_gate1 = chiSquareQuantile(association_.new_landmark_probability, 1.0);
+  std::vector<Candidate> candidates;
+  std::vector<char> near_new_gate(count, 0);
+  for (int i = 0; i < count; ++i) {
+    for (int slot = 0; slot < filter.landmarkCount(); ++slot) {
+      if (filter.landmarkKind(slot) != kind_) continue;
+      const int id = filter.landmarks()[slot].id;
+      const auto track = tracks_.find(id);
+      if (track == tracks_.end() || !overlaps(filter, slot, track->second, segments[i])) continue;
+      Candidate c;
+      c.observation = i;
+      c.landmark_id = id;
+      c.match.landmark_id = id;
+      if (kind_ == LandmarkKind::kLineAngle) {
+        std::copy(track->second.endpoint_ids, track->second.endpoint_ids + 2, c.match.endpoint_ids);
+      }
+      Eigen::VectorXd innovation;
+      Eigen::MatrixXd S;
+      FilterStatus status =
+          filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
+      if (status != FilterStatus::kOk && kind_ == LandmarkKind::kLineAngle) {
+        // Endpoints that no longer agree with the direction (θ_f beyond
+        // kMaxEndpointDisagreement from their line): the direction alone.
+        c.match.endpoint_ids[0] = c.match.endpoint_ids[1] = -1;
+        status = filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
+      }
+      if (status != FilterStatus::kOk) continue;
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
+      c.mahalanobis2 = innovation.dot(ldlt.solve(innovation));
+      double log_det = std::log(ldlt.vectorD().prod());
+      bool inside = c.mahalanobis2 <= (innovation.size() == 1 ? gate1 : gate2);
+      bool inside_new = c.mahalanobis2 <= (innovation.size() == 1 ? new_gate1 : new_gate2);
+      if (innovation.size() == 1) {
+        // θ alone: the offset from the latest sighting as a second row.
+        double offset_d2 = 0.0;
+        if (!offsetCompatible(filter, slot, track->second, report.observations[i], &offset_d2)) {
+          continue;
+        }
+        c.mahalanobis2 += offset_d2;
+        log_det += std::log(offsetVariance(filter, report.observations[i]) +
+                            track->second.latest_offset_variance);
+        inside = c.mahalanobis2 <= gate2;
+        inside_new = c.mahalanobis2 <= new_gate2;
+      }
+      if (inside_new) near_new_gate[i] = 1;
+      if (!inside) continue;
+      c.match.observation = i;
+      c.score = c.mahalanobis2 + log_det;
+      candidates.push_back(c);
+    }
+  }
+
+  // Greedy nearest neighbour: best pairs first, one per segment and landmark.
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.score < b.score; });
+  std::vector<char> taken(count, 0);
+  std::unordered_map<int, char> landmark_taken;
+  for (const Candidate& c : candidates) {
+    if (taken[c.observation] || landmark_taken[c.landmark_id]) continue;
+    taken[c.observation] = 1;
+    landmark_taken[c.landmark_id] = 1;
+    report.matches.push_back(c.match);
+  }
+
+  report.update_status = filter.updateLines(report.observations, report.matches, &report.nis);
+  if (report.update_status != FilterStatus::kOk) {
+    report.matches.clear();
+    report.nis.clear();
+  }
+  for (const LineMatch& m : report.matches) {
+    report.endpoint_matches += m.endpoint_ids[0] >= 0 || m.endpoint_ids[1] >= 0;
+  }
+
+  // The point landmarks at each segment's two ends (θ-only landmarks).
+  auto endsOf = [&](int observation, int ends[2]) {
+    ends[0] = ends[1] = -1;
+    const int l = report.observation_line[observation];
+    const LineFeature& line = features.lines[l];
+    for (const auto& [feature, id] : landmark_of_feature) {
+      const PointFeature& point = features.points_of_interest[feature];
+      if (point.line != l && point.other_line != l) continue;
+      const bool at_start =
+          (point.position - line.start).norm() <= (point.position - line.end).norm();
+      ends[at_start ? 0 : 1] = id;
+    }
+  };
+  auto addEndpoints = [&](int id, const int ends[2]) {
+    Track& track = tracks_[id];
+    for (int k = 0; k < 2; ++k) {
+      const int e = ends[k];
+      if (e < 0 || filter.slotOf(e) < 0 || e == track.endpoint_ids[0] ||
+          e == track.endpoint_ids[1]) {
+        continue;
+      }
+      // Endpoints close together fix neither the offset nor the direction.
+      const int other = track.endpoint_ids[0] >= 0 ? track.endpoint_ids[0] : track.endpoint_ids[1];
+      if (other >= 0 && (filter.landmarkPosition(filter.slotOf(other)) -
+                         filter.landmarkPosition(filter.slotOf(e)))
+                                .norm() < options_.min_length) {
+        continue;
+      }
+      for (int& slot : track.endpoint_ids) {
+        if (slot < 0) {
+          slot = e;
+          break;
+        }
+      }
+    }
+  };
+
+  for (const LineMatch& m : report.matches) {
+    remember(filter, m.landmark_id, report.observations[m.observation],
+             toMap(filter, features.lines[report.observation_line[m.observation]]), true);
+    if (kind_ == LandmarkKind::kLineAngle) {
+      int ends[2];
+      endsOf(m.observation, ends);
+      addEndpoints(m.landmark_id, ends);
+    }
+  }
+  // Augment after the update so new landmarks hang off the corrected pose.
+  for (int i = 0; i < count; ++i) {
+    if (taken[i]) continue;
+    if (near_new_gate[i]) {
+      ++report.ambiguous;
+      continue;
+    }
+    int id = -1;
+    if (filter.augmentLine(report.observations[i], kind_, &id) != FilterStatus::kOk) {
+      ++report.augment_failures;
+      continue;
+    }
+    report.new_landmark_ids.push_back(id);
+    remember(filter, id, report.observations[i],
+             toMap(filter, features.lines[report.observation_line[i]]), false);
+    if (kind_ == LandmarkKind::kLineAngle) {
+      int ends[2];
+      endsOf(i, ends);
+      addEndpoints(id, ends);
+    }
+  }
+}
+
+void LineLandmarks::synchronise(const EkfSlam& filter) {
+  for (auto it = tracks_.begin(); it != tracks_.end();) {
+    if (filter.slotOf(it->first) < 0) {
+      it = tracks_.erase(it);
+      continue;
+    }
+    for (int& e : it->second.endpoint_ids) {
+      if (e >= 0 && filter.slotOf(e) < 0) e = -1;
+    }
+    ++it;
+  }
+  refreshSupport(filter);
+}
+
+void LineLandmarks::reanchor(const std::vector<std::pair<int, Pose2>>& corrections) {
+  for (const auto& [id, correction] : corrections) {
+    const auto it = tracks_.find(id);
+    if (it == tracks_.end()) continue;
+    Track& track = it->second;
+    track.first = transformFrom(correction, track.first);
+    track.last = transformFrom(correction, track.last);
+    track.latest_mid = transformFrom(correction, track.latest_mid);
+  }
+}
+
+void LineLandmarks::seed(const EkfSlam& filter,
+                         const std::unordered_map<int, LineSupport>& support) {
+  for (const auto& [id, given] : support) {
+    const int slot = filter.slotOf(id);
+    if (slot < 0 || filter.landmarkKind(slot) != kind_) continue;
+    Track track;
+    track.endpoint_ids[0] = given.endpoint_ids[0];
+    track.endpoint_ids[1] = given.endpoint_ids[1];
+    if (kind_ == LandmarkKind::kLine) {
+      const PolarLine line = filter.lineLandmark(slot);
+      const Vector2 foot = line.p * Vector2(std::cos(line.theta), std::sin(line.theta));
+      const Vector2 d = direction(line.theta);
+      track.first = foot + given.s_min * d;
+      track.last = foot + given.s_max * d;
+      track.latest_offset_variance = filter.landmarkCovariance(slot)(0, 0);
+    } else {
+      std::vector<int> ends;  // slots of the endpoint points
+      for (int e : given.endpoint_ids) {
+        const int end_slot = e >= 0 ? filter.slotOf(e) : -1;
+        if (end_slot >= 0 && filter.landmarkKind(end_slot) == LandmarkKind::kPoint) {
+          ends.push_back(end_slot);
+        }
+      }
+      if (ends.empty()) continue;
+      track.first = filter.landmarkPosition(ends.front());
+      track.last = filter.landmarkPosition(ends.back());
+      // The offset across the line is known as well as its first end.
+      const double theta = filter.lineAngle(slot);
+      const Vector2 normal(std::cos(theta), std::sin(theta));
+      track.latest_offset_variance = normal.dot(filter.landmarkCovariance(ends.front()) * normal);
+    }
+    track.latest_mid = 0.5 * (track.first + track.last);
+    tracks_[id] = track;
+  }
+  refreshSupport(filter);
+}
+
+void LineLandmarks::refreshSupport(const EkfSlam& filter) {
+  support_.clear();
+  for (const auto& [id, track] : tracks_) {
+    const int slot = filter.slotOf(id);
+    if (slot < 0) continue;
+    const Vector2 d = direction(landmarkTheta(filter, slot));
+    LineSupport& s = support_[id];
+    s.s_min = std::min(d.dot(track.first), d.dot(track.last));
+    s.s_max = std::max(d.dot(track.first), d.dot(track.last));
+    s.endpoint_ids[0] = track.endpoint_ids[0];
+    s.endpoint_ids[1] = track.endpoint_ids[1];
+  }
+}
+
+}  // namespace ekf_slam

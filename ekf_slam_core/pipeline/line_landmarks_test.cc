@@ -1,0 +1,277 @@
+#include "ekf_slam_core/pipeline/line_landmarks.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <iostream>
+#include <limits>
+
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
+#include "ekf_slam_core/pipeline/slam_pipeline.h"
+#include "ekf_slam_core/sim/drive.h"
+
+namespace ekf_slam {
+namespace {
+
+const LandmarkSet kLineSets[] = {LandmarkSet::kPointsAndLines, LandmarkSet::kPointsAndLineAngles};
+
+PipelineOptions lineOptions(LandmarkSet set, const Pose2& laser) {
+  PipelineOptions options;
+  options.filter.laser_pose = laser;
+  options.scan_matching.enabled = false;
+  options.loop_closure.enabled = false;  // features are fed without scans below
+  options.landmarks = set;
+  return options;
+}
+
+int lineLandmarkCount(const EkfSlam& filter) {
+  int count = 0;
+  for (const LandmarkInfo& info : filter.landmarks()) count += info.kind != LandmarkKind::kPoint;
+  return count;
+}
+
+// The wall segment from a to b (laser frame) as the extractor reports it.
+LineFeature segment(const Vector2& a, const Vector2& b) {
+  LineFeature line;
+  const Vector2 u = (b - a).normalized();
+  Vector2 n(-u.y(), u.x());
+  if (n.dot(a) < 0.0) n = -n;
+  line.p = n.dot(a);
+  line.theta = std::atan2(n.y(), n.x());
+  line.covariance << 1e-4, 0.0, 0.0, 1e-5;
+  line.start = a;
+  line.end = b;
+  line.num_points = 50;
+  return line;
+}
+
+double minEigenvalue(const Eigen::MatrixXd& P) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P).eigenvalues().minCoeff();
+}
+
+// The simulated drive among walls and cartons: walls become line landmarks
+// that are re-observed scan after scan, every landmark has its extent, and
+// the estimate stays as good as with points alone.
+TEST(LineLandmarks, WallsAreAssociatedAndAugmentedAlongADrive) {
+  sim::DriveOptions drive_options;
+  drive_options.start =
+      Pose2(sim::kMixedDriveStartX, sim::kMixedDriveStartY, sim::kMixedDriveStartYaw);
+  drive_options.laser = Pose2(0.16, 0.0, 0.0);
+  drive_options.seed = 4;
+  const sim::PolygonWorld world = sim::roomWithCartons();
+  const sim::SimulatedDrive drive = sim::simulateDrive(world, sim::mixedDrive(), drive_options);
+  for (LandmarkSet set : kLineSets) {
+    SCOPED_TRACE(toString(set));
+    SlamPipeline pipeline(lineOptions(set, drive_options.laser));
+    for (size_t i = 0; i < drive.scans.size(); ++i) {
+      pipeline.processScan(drive.scans[i], drive.odometry[i]);
+    }
+    const PipelineCounters& c = pipeline.counters();
+    std::cout << toString(set) << ": " << c.line_observations << " segments, " << c.line_matches
+              << " matched, " << c.new_line_landmarks << " new, " << c.line_ambiguous
+              << " ambiguous, average NIS " << c.line_nis_sum / std::max<long>(c.line_matches, 1)
+              << "\n";
+    EXPECT_GT(c.new_line_landmarks, 0);
+    // Nearly every sighting of a wall is a match, not a new landmark.
+    EXPECT_GT(c.line_matches, 20 * c.new_line_landmarks);
+    EXPECT_EQ(c.lines_refused, 0);
+    EXPECT_EQ(c.line_update_failures, 0);
+    const EkfSlam& filter = pipeline.filter();
+    const int lines = lineLandmarkCount(filter);
+    EXPECT_GE(lines, 4);   // the room's walls at least …
+    EXPECT_LE(lines, 12);  // … and not a landmark per sighting
+    ASSERT_EQ(static_cast<int>(pipeline.lineSupport().size()), lines);
+
+    // θ-only walls get the corners at their ends as endpoints.
+    int with_endpoints = 0;
+    for (const auto& entry : pipeline.lineSupport()) {
+      with_endpoints += entry.second.endpoint_ids[0] >= 0 || entry.second.endpoint_ids[1] >= 0;
+    }
+    if (set == LandmarkSet::kPointsAndLineAngles) EXPECT_GE(with_endpoints, 2);
+    if (set == LandmarkSet::kPointsAndLines) EXPECT_EQ(with_endpoints, 0);
+
+    // Every line landmark lies on a wall of the world over its seen extent.
+    const Pose2 world_from_map = drive.truth.front();
+    for (const auto& [id, support] : pipeline.lineSupport()) {
+      const int slot = filter.slotOf(id);
+      ASSERT_GE(slot, 0);
+      EXPECT_GT(support.s_max - support.s_min, 0.5);
+      const double theta = filter.landmarkKind(slot) == LandmarkKind::kLine
+                               ? filter.lineLandmark(slot).theta
+                               : filter.lineAngle(slot);
+      if (filter.landmarkKind(slot) != LandmarkKind::kLine) continue;
+      const Vector2 n(std::cos(theta), std::sin(theta)), d(-n.y(), n.x());
+      const double p = filter.lineLandmark(slot).p;
+      for (double s : {support.s_min, support.s_max}) {
+        const Vector2 q = transformFrom(world_from_map, p * n + s * d);
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const sim::Segment& wall : world.segments()) {
+          const Vector2 w = wall.b - wall.a;
+          const double t = std::clamp((q - wall.a).dot(w) / w.squaredNorm(), 0.0, 1.0);
+          nearest = std::min(nearest, (wall.a + t * w - q).norm());
+        }
+        EXPECT_LT(nearest, 0.1) << "line " << id << " end at s = " << s;
+      }
+    }
+    const Pose2 truth = between(drive.truth.front(), drive.truth.back());
+    EXPECT_LT((filter.pose().translation() - truth.translation()).norm(), 0.1);
+    const Eigen::MatrixXd P = filter.covariance();
+    EXPECT_TRUE(P.allFinite());
+    EXPECT_GT(minEigenvalue(P), -1e-9);
+  }
+}
+
+// Two collinear walls in different rooms: the second one is seen where the
+// first was never seen, so it becomes a landmark of its own instead of
+// dragging the robot onto the first.
+TEST(LineLandmarks, CollinearWallsOutsideTheSeenExtentStayApart) {
+  for (LandmarkSet set : kLineSets) {
+    SCOPED_TRACE(toString(set));
+    PipelineOptions options = lineOptions(set, Pose2());
+    SlamPipeline pipeline(options);
+    // The robot drives along x; a wall at y = 2 from x = 0 to 3 (map frame)
+    // is in view while the robot is at x <= 1, another on the same line
+    // from x = 8 to 11 once the robot is at x >= 7.
+    for (int k = 0; k <= 20; ++k) {
+      const double x = 0.5 * k;
+      FeatureSet features;
+      if (x <= 1.0) features.lines.push_back(segment({0.0 - x, 2.0}, {3.0 - x, 2.0}));
+      if (x >= 7.0) features.lines.push_back(segment({8.0 - x, 2.0}, {11.0 - x, 2.0}));
+      pipeline.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+    }
+    EXPECT_EQ(lineLandmarkCount(pipeline.filter()), 2);
+    EXPECT_EQ(pipeline.counters().new_line_landmarks, 2);
+    EXPECT_GT(pipeline.counters().line_matches, 5);
+    ASSERT_EQ(pipeline.lineSupport().size(), 2u);
+    for (const auto& [id, support] : pipeline.lineSupport()) {
+      EXPECT_NEAR(support.s_max - support.s_min, 3.0, 1e-6) << "line " << id;
+    }
+
+    // With a margin wider than the gap the second wall is taken for the first.
+    options.lines.overlap_margin = 6.0;
+    SlamPipeline merged(options);
+    for (int k = 0; k <= 20; ++k) {
+      const double x = 0.5 * k;
+      FeatureSet features;
+      if (x <= 1.0) features.lines.push_back(segment({0.0 - x, 2.0}, {3.0 - x, 2.0}));
+      if (x >= 7.0) features.lines.push_back(segment({8.0 - x, 2.0}, {11.0 - x, 2.0}));
+      merged.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+    }
+    EXPECT_EQ(lineLandmarkCount(merged.filter()), 1);
+  }
+}
+
+// A map saved with its lines and loaded into a new pipeline: the lines
+// keep their extents, so a collinear wall beyond them stays a wall of its own.
+TEST(LineLandmarks, ExtentsSurviveAMapFileRoundTrip) {
+  const PipelineOptions options = lineOptions(LandmarkSet::kPointsAndLines, Pose2());
+  SlamPipeline first(options);
+  for (int k = 0; k <= 2; ++k) {
+    const double x = 0.5 * k;
+    FeatureSet features;
+    features.lines.push_back(segment({0.0 - x, 2.0}, {3.0 - x, 2.0}));
+    first.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+  }
+  ASSERT_EQ(first.lineSupport().size(), 1u);
+  const LandmarkMapFile map = toLandmarkMapFile(first.filter(), first.lineSupport(), "map");
+
+  // The new run starts where the map puts it: at x = 7, from where only
+  // the second wall, from x = 8 to 11, is in view.
+  PipelineOptions relocated = options;
+  relocated.initial_pose = Pose2(7.0, 0.0, 0.0);
+  relocated.initial_pose_covariance = Matrix3::Identity() * 1e-6;
+  SlamPipeline second(relocated);
+  std::unordered_map<int, LineSupport> support;
+  ASSERT_EQ(seedFilter(map, &second.mutableFilter(), &support), 0);
+  second.seedLineSupport(support);
+  ASSERT_EQ(second.lineSupport().size(), 1u);
+  const LineSupport& before = first.lineSupport().begin()->second;
+  const LineSupport& after = second.lineSupport().begin()->second;
+  EXPECT_NEAR(after.s_min, before.s_min, 1e-9);
+  EXPECT_NEAR(after.s_max, before.s_max, 1e-9);
+
+  for (int k = 0; k <= 6; ++k) {
+    const double x = 7.0 + 0.5 * k;
+    FeatureSet features;
+    features.lines.push_back(segment({8.0 - x, 2.0}, {11.0 - x, 2.0}));
+    second.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+  }
+  EXPECT_EQ(lineLandmarkCount(second.filter()), 2);
+}
+
+// A wall seen end-on: its line passes through the laser (p = 0), the beams
+// graze it. Neither augmenting nor updating may break the filter.
+TEST(LineLandmarks, AWallSeenEndOnLeavesAValidFilter) {
+  for (LandmarkSet set : kLineSets) {
+    SCOPED_TRACE(toString(set));
+    SlamPipeline pipeline(lineOptions(set, Pose2(0.1, 0.0, 0.0)));
+    for (int k = 0; k < 10; ++k) {
+      const double x = 0.1 * k;
+      FeatureSet features;
+      // The wall y = 0 ahead of the robot, in the laser frame at (x + 0.1, 0).
+      features.lines.push_back(segment({2.0 - x, 0.0}, {5.0 - x, 0.0}));
+      // And one across, to have some ordinary line as well.
+      features.lines.push_back(segment({4.0 - x, -1.5}, {4.0 - x, 1.5}));
+      const ScanResult r = pipeline.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+      EXPECT_EQ(r.outcome, ScanOutcome::kIterated);
+      EXPECT_EQ(r.lines.update_status, FilterStatus::kOk);
+    }
+    const EkfSlam& filter = pipeline.filter();
+    EXPECT_EQ(lineLandmarkCount(filter), 2);
+    EXPECT_TRUE(filter.state().allFinite());
+    const Eigen::MatrixXd P = filter.covariance();
+    EXPECT_TRUE(P.allFinite());
+    EXPECT_GT(minEigenvalue(P), -1e-12);
+    EXPECT_NEAR(filter.pose().x, 0.9, 1e-3);
+    EXPECT_NEAR(filter.pose().y, 0.0, 1e-3);
+  }
+}
+
+// A segment whose value or covariance is not finite is refused and
+// counted; the filter ends exactly where it ends without that segment.
+TEST(LineLandmarks, NonFiniteLinesAreRefusedCountedAndLeaveTheMapUnchanged) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (LandmarkSet set : kLineSets) {
+    SCOPED_TRACE(toString(set));
+    SlamPipeline clean(lineOptions(set, Pose2()));
+    SlamPipeline dirty(lineOptions(set, Pose2()));
+    for (int k = 0; k < 5; ++k) {
+      const double x = 0.2 * k;
+      FeatureSet features;
+      features.lines.push_back(segment({1.0 - x, 2.0}, {4.0 - x, 2.0}));
+      clean.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+      LineFeature bad = segment({3.0 - x, -1.0}, {3.0 - x, 1.5});
+      bad.covariance(0, 1) = bad.covariance(1, 0) = k % 2 == 0 ? nan : bad.covariance(0, 1);
+      if (k % 2 == 1) bad.theta = std::numeric_limits<double>::infinity();
+      features.lines.push_back(bad);
+      dirty.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+    }
+    EXPECT_EQ(clean.counters().lines_refused, 0);
+    EXPECT_EQ(dirty.counters().lines_refused, 5);
+    EXPECT_EQ(dirty.filter().stateDim(), clean.filter().stateDim());
+    EXPECT_EQ(dirty.filter().state(), clean.filter().state());
+    EXPECT_EQ(dirty.filter().covariance(), clean.filter().covariance());
+  }
+}
+
+TEST(LineLandmarks, TheLandmarkSettingIsValidated) {
+  PipelineOptions options;
+  EXPECT_EQ(options.landmarks, LandmarkSet::kPoints);
+  for (LandmarkSet set : kLineSets) {
+    options.landmarks = set;
+    EXPECT_EQ(options.validate(), "");
+  }
+  options.landmarks = static_cast<LandmarkSet>(7);
+  const std::string error = options.validate();
+  EXPECT_NE(error.find("landmarks"), std::string::npos) << error;
+  EXPECT_NE(error.find("points, points+lines, points+lines_theta"), std::string::npos) << error;
+  options.landmarks = LandmarkSet::kPointsAndLines;
+  options.lines.min_length = -1.0;
+  EXPECT_NE(options.validate().find("lines.min_length"), std::string::npos) << options.validate();
+  options.lines.min_length = 1.0;
+  options.lines.max_range = 0.0;
+  EXPECT_NE(options.validate().find("lines.max_range"), std::string::npos) << options.validate();
+}
+
+}  // namespace
+}  // namespace ekf_slam
