@@ -16,6 +16,8 @@ const char* toString(LandmarkSet set) {
       return "points+lines";
     case LandmarkSet::kPointsAndLineAngles:
       return "points+lines_theta";
+    case LandmarkSet::kPointsAndMecp:
+      return "points+mecp";
   }
   return "unknown";
 }

@@ -46,6 +46,7 @@ enum class LandmarkSet {
   kPoints,               // corners and segment ends only (the thesis's §4.2)
   kPointsAndLines,       // + (p, θ) line landmarks
   kPointsAndLineAngles,  // + θ-only line landmarks with endpoint points
+  kPointsAndMecp,        // + the MECP of each scan's matched points as an extra update (§4.4)
 };
 const char* toString(LandmarkSet set);
 

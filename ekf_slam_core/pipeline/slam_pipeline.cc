@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "ekf_slam_core/mecp/mecp_update.h"
+
 namespace ekf_slam {
 
 const char* toString(ScanOutcome outcome) {
@@ -73,6 +75,7 @@ namespace {
 std::unique_ptr<LineLandmarks> lineLandmarksFor(const PipelineOptions& options) {
   switch (options.landmarks) {
     case LandmarkSet::kPoints:
+    case LandmarkSet::kPointsAndMecp:
       return nullptr;
     case LandmarkSet::kPointsAndLines:
       return std::make_unique<LineLandmarks>(LandmarkKind::kLine, options.lines,
@@ -338,6 +341,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   if (lines_) {
     lines_->observe(filter_, out->features, out->observation_feature, out->iteration, &out->lines);
   }
+  if (options_.landmarks == LandmarkSet::kPointsAndMecp) updateMecp(*out);
   recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
   full_recorder_.addIteration(stamp, filter_, predict ? &control : nullptr, out->observations,
                               out->iteration);
@@ -401,6 +405,32 @@ int SlamPipeline::boundLandmarks() {
   ids.reserve(excess);
   for (int i = 0; i < excess; ++i) ids.push_back(order[i]->id);
   return filter_.removeLandmarks(ids);
+}
+
+void SlamPipeline::updateMecp(const ScanResult& result) {
+  // Per point observation, the landmark it was matched to or made into,
+  // following this scan's merges.
+  std::vector<int> ids(result.observations.size(), -1);
+  const IterationReport& report = result.iteration;
+  for (const PointMatch& m : report.matches) ids[m.observation] = m.landmark_id;
+  for (const PointMatch& m : report.created) ids[m.observation] = m.landmark_id;
+  for (const auto& [kept, dropped] : report.merged) {
+    for (int& id : ids) {
+      if (id == dropped) id = kept;
+    }
+  }
+  switch (updateWithMecp(&filter_, result.observations, ids).outcome) {
+    case MecpOutcome::kApplied:
+      ++counters_.mecp_updates;
+      break;
+    case MecpOutcome::kNoPolygon:
+      ++counters_.mecp_without_polygon;
+      break;
+    case MecpOutcome::kNearCentre:
+    case MecpOutcome::kFilterRefused:
+      ++counters_.mecp_skipped;
+      break;
+  }
 }
 
 const std::unordered_map<int, LineSupport>& SlamPipeline::lineSupport() const {

@@ -125,7 +125,8 @@ struct PipelineOptions {
     v.choice("landmarks", landmarks,
              {{LandmarkSet::kPoints, "points"},
               {LandmarkSet::kPointsAndLines, "points+lines"},
-              {LandmarkSet::kPointsAndLineAngles, "points+lines_theta"}});
+              {LandmarkSet::kPointsAndLineAngles, "points+lines_theta"},
+              {LandmarkSet::kPointsAndMecp, "points+mecp"}});
     v.section("lines", lines);
   }
 
@@ -183,14 +184,17 @@ struct PipelineCounters {
   long line_endpoint_matches = 0;  // of those: θ-only, the offset from endpoint points
   long line_ambiguous = 0;
   long new_line_landmarks = 0;
-  long lines_refused = 0;                 // segments with non-finite values or covariance
-  long line_update_failures = 0;          // iterations whose line update was refused
-  double line_nis_sum = 0.0;              // over all line matches
-  long pruned = 0;                        // tentative landmarks removed
-  long pruned_rare = 0;                   // landmarks removed by prune_min_observations
-  long marginalised = 0;                  // landmarks dropped by the max_landmarks bound
-  long scan_matches = 0;                  // scans aligned by the scan matcher
-  long scan_match_refusals = 0;           // scans that fell back to the odometry increment
+  long lines_refused = 0;         // segments with non-finite values or covariance
+  long line_update_failures = 0;  // iterations whose line update was refused
+  double line_nis_sum = 0.0;      // over all line matches
+  long mecp_updates = 0;          // points+mecp: scans whose MECP updated the filter
+  long mecp_without_polygon = 0;  // … whose matched points enclose the robot in none
+  long mecp_skipped = 0;          // … whose centre lay too near, or the update was refused
+  long pruned = 0;                // tentative landmarks removed
+  long pruned_rare = 0;           // landmarks removed by prune_min_observations
+  long marginalised = 0;          // landmarks dropped by the max_landmarks bound
+  long scan_matches = 0;          // scans aligned by the scan matcher
+  long scan_match_refusals = 0;   // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
   long reanchors = 0;                     // times the filter took the loop-closed geometry
   double nis_sum = 0.0;                   // over all matches
@@ -306,6 +310,9 @@ class SlamPipeline {
   Matrix3 deadReckonedCovariance(const Pose2& odometry) const;
   int pruneRarelySeen();  // returns how many landmarks were removed
   int boundLandmarks();   // max_landmarks; returns how many were marginalised
+  // points+mecp: the MECP of the scan's matched point landmarks as an extra
+  // update (ekf_slam_core/mecp/mecp_update.h), counted.
+  void updateMecp(const ScanResult& result);
   void trackKeyScans();
   void reanchorFilter(const Pose2& causal, const Pose2& published);
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;

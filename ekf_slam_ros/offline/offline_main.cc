@@ -501,7 +501,8 @@ int main(int argc, char** argv) {
          << " as seen rarely, " << c.marginalised << " marginalised by max_landmarks)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
          << "line landmarks (" << ekf_slam::toString(config.pipeline.landmarks) << "): "
-         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints
+         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints ||
+                     config.pipeline.landmarks == ekf_slam::LandmarkSet::kPointsAndMecp
                  ? std::string("none")
                  : std::to_string(c.line_observations) +
                        " segments offered, matched: " + std::to_string(c.line_matches) + " (" +
@@ -513,6 +514,14 @@ int main(int argc, char** argv) {
                        ", average NIS: " +
                        std::to_string(c.line_matches ? c.line_nis_sum / c.line_matches : 0.0) +
                        ", in the map: " + std::to_string(pipeline.lineSupport().size()))
+         << "\n"
+         << "MECP updates (points+mecp): "
+         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPointsAndMecp
+                 ? std::to_string(c.mecp_updates) + " applied, " +
+                       std::to_string(c.mecp_without_polygon) +
+                       " scans without a polygon around the robot, " +
+                       std::to_string(c.mecp_skipped) + " skipped (centre too near, or refused)"
+                 : std::string("off"))
          << "\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
