@@ -7,6 +7,8 @@
 #include <iostream>
 #include <string>
 
+#include "ekf_slam_core/models/odometry_motion_model.h"
+
 namespace ekf_slam {
 
 struct ExperimentOptions {
@@ -42,6 +44,15 @@ inline bool parseExperimentOptions(int argc, char** argv, const std::string& pro
               << " --out DIR [--runs N] [--seed S] [--odometry-noise-scale F]\n";
   }
   return ok;
+}
+
+// The odometry noise's standard deviations times `scale` (the quadratic
+// terms' variances times scale²): --odometry-noise-scale.
+inline void scaleOdometryNoise(double scale, MotionNoiseOptions* noise) {
+  for (double* variance : {&noise->rot_per_rot, &noise->rot_per_trans, &noise->trans_per_trans,
+                           &noise->trans_per_rot}) {
+    *variance *= scale * scale;
+  }
 }
 
 }  // namespace ekf_slam

@@ -247,11 +247,7 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
   sim_options.waypoints = waypoints();
   sim_options.max_range = kMaxRange;
   sim_options.field_of_view = 2.0 * kPi;
-  ekf_slam::MotionNoiseOptions& noise = sim_options.odometry_noise;
-  for (double* variance :
-       {&noise.rot_per_rot, &noise.rot_per_trans, &noise.trans_per_trans, &noise.trans_per_rot}) {
-    *variance *= noise_scale * noise_scale;
-  }
+  ekf_slam::scaleOdometryNoise(noise_scale, &sim_options.odometry_noise);
   ekf_slam::sim::LandmarkSimulator sim(sim_options);
 
   ekf_slam::FilterOptions options;
