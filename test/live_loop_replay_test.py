@@ -11,7 +11,10 @@
 Checks: the map arrives while the log plays, with values -1 / 0 / 100 only
 and walls in it; loops are accepted and each moves map -> odom far more
 than an ordinary scan does; and the published poses are the offline causal
-poses. With a correction delay d >= 0 (the deterministic mode) every scan
+poses. (Each loop's step in map -> odom is measured from the published
+poses and the odometry, stamped with their scans, so that it does not
+depend on how late a transform reached this process.) With a correction
+delay d >= 0 (the deterministic mode) every scan
 agrees: the node's back end, on its own thread, hands each scan the graph
 as it stood d scans earlier, as the offline runner does. With d = -1 (a
 correction takes effect as soon as the back end has it) they agree except
@@ -51,7 +54,7 @@ class LiveLoopReplay(unittest.TestCase):
             self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
         self.poses = []  # (stamp, x, y, theta)
         self.map_to_odom = []  # (stamp, x, y, theta)
-        self.odom_to_base = []  # (stamp, x, y)
+        self.odom_to_base = []  # (stamp, x, y, theta)
         self.maps = []
         self.loop_paths = []  # stamps of loop_closed_path messages
         self.loops_accepted = 0
@@ -70,7 +73,7 @@ class LiveLoopReplay(unittest.TestCase):
         self.maps.append(msg)
 
     def on_loop_path(self, msg):
-        self.loop_paths.append(msg.header.stamp.to_sec())
+        self.loop_paths.append(round(msg.header.stamp.to_sec(), 6))
 
     def on_tf(self, msg):
         for t in msg.transforms:
@@ -80,7 +83,7 @@ class LiveLoopReplay(unittest.TestCase):
                                          r.translation.y, yaw_of(r.rotation)))
             elif t.header.frame_id == "odom" and t.child_frame_id == "base_link":
                 self.odom_to_base.append((t.header.stamp.to_sec(), r.translation.x,
-                                          r.translation.y))
+                                          r.translation.y, yaw_of(r.rotation)))
 
     def on_diagnostics(self, msg):
         for status in msg.status:
@@ -121,6 +124,68 @@ class LiveLoopReplay(unittest.TestCase):
                     rows.append(tuple(float(v) for v in line.split()[:4]))
         return rows
 
+    def corrections(self):
+        """How far each scan's map -> odom moved the robot in the map.
+
+        The node publishes map -> odom = pose ∘ odometry⁻¹ at every scan, so
+        the change at scan i, measured at the robot, is the distance between
+        the published pose and the previous pose carried forward by the
+        odometry increment (odom -> base_link from /tf, interpolated at the
+        scan stamps). Taken from the poses, stamped with their scans, it does
+        not depend on when the transforms reached this process.
+
+        Returns {stamp: step} and after(stamp): for the scan at stamp, the
+        distances at the robot between its map -> odom and each map -> odom
+        on /tf stamped in the following 10 s.
+        """
+        odom = sorted(self.odom_to_base)
+        odom_stamps = [o[0] for o in odom]
+
+        def odometry_at(t):
+            k = bisect.bisect_left(odom_stamps, t)
+            if k == 0 or k == len(odom):
+                return None
+            (t0, x0, y0, h0), (t1, x1, y1, h1) = odom[k - 1], odom[k]
+            f = 0.0 if t1 <= t0 else (t - t0) / (t1 - t0)
+            return (x0 + f * (x1 - x0), y0 + f * (y1 - y0), h0 + f * wrap(h1 - h0))
+
+        def compose(a, b):
+            c, s = math.cos(a[2]), math.sin(a[2])
+            return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2])
+
+        def inverse(a):
+            c, s = math.cos(a[2]), math.sin(a[2])
+            return (-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2])
+
+        poses = sorted({round(p[0], 6): p for p in self.poses}.values())
+        steps, map_to_odom = {}, {}
+        previous = None
+        for stamp, x, y, theta in poses:
+            o = odometry_at(stamp)
+            if o is None:
+                previous = None
+                continue
+            map_to_odom[round(stamp, 6)] = (compose((x, y, theta), inverse(o)), o)
+            if previous is not None:
+                (px, py, ptheta), po = previous
+                predicted = compose((px, py, ptheta), compose(inverse(po), o))
+                steps[round(stamp, 6)] = math.hypot(x - predicted[0], y - predicted[1])
+            previous = ((x, y, theta), o)
+
+        tf_sorted = sorted(self.map_to_odom)
+        tf_stamps = [e[0] for e in tf_sorted]
+
+        def after(stamp):
+            transform, o = map_to_odom[round(stamp, 6)]
+            ours = compose(transform, o)
+            first = bisect.bisect_left(tf_stamps, stamp)
+            last = bisect.bisect_right(tf_stamps, stamp + 10.0)
+            for _, tx, ty, th in tf_sorted[first:last]:
+                theirs = compose((tx, ty, th), o)
+                yield math.hypot(theirs[0] - ours[0], theirs[1] - ours[1])
+
+        return steps, after
+
     def test_live_map_loops_and_causal_poses(self):
         self.play()
         self.assertGreater(len(self.poses), 1000, "the node published too few poses")
@@ -137,43 +202,20 @@ class LiveLoopReplay(unittest.TestCase):
         # Loops close, and each moves map -> odom far more than a scan does.
         self.assertGreater(self.loops_accepted, 0)
         self.assertGreater(len(self.loop_paths), 0)
-        # How far each change of map -> odom moved the robot in the map: at
-        # the robot's odometry position p at a scan's stamp t, the largest
-        # |T' p - T p| over the transforms T' stamped in [t, t + 3 s], T the
-        # last one stamped before t. (Measured at the robot, a heading
-        # correction far from the odom origin does not count as a jump; and
-        # stamp-sorted, a node lagging behind its odometry, whose timer
-        # re-sends the old transform stamped with the newest odometry,
-        # still shows the jump within the window.) At each loop
-        # optimisation against the same at ordinary scans far from any loop.
-        tf_sorted = sorted(self.map_to_odom)
-        stamps_tf = [e[0] for e in tf_sorted]
-        odom_sorted = sorted(self.odom_to_base)
-        stamps_odom = [e[0] for e in odom_sorted]
-
-        def apply(transform, x, y):
-            _, tx, ty, th = transform
-            return (tx + math.cos(th) * x - math.sin(th) * y,
-                    ty + math.sin(th) * x + math.cos(th) * y)
-
-        def move_across(t):
-            k = bisect.bisect_left(stamps_tf, t) - 1
-            j = bisect.bisect_right(stamps_odom, t) - 1
-            if k < 0 or j < 0:
-                return 0.0
-            _, px, py = odom_sorted[j]
-            ax, ay = apply(tf_sorted[k], px, py)
-            end = bisect.bisect_right(stamps_tf, t + 3.0)
-            return max([math.hypot(bx - ax, by - ay) for bx, by in
-                        (apply(e, px, py) for e in tf_sorted[k + 1:end])] or [0.0])
-
-        at_loops = [move_across(t) for t in self.loop_paths]
-        quiet = [p[0] for p in self.poses if all(abs(p[0] - t) > 5.0 for t in self.loop_paths)]
-        ordinary = sorted(move_across(t) for t in quiet[::10])[len(quiet[::10]) // 2]
+        steps, after = self.corrections()
+        at_loops = [steps[t] for t in self.loop_paths if t in steps]
+        quiet = [s for t, s in steps.items() if all(abs(t - u) > 5.0 for u in self.loop_paths)]
+        ordinary = sorted(quiet)[len(quiet) // 2]
         print("map -> odom steps at the robot: median %.5f m, at the %d loop optimisations up to "
               "%.3f m" % (ordinary, len(at_loops), max(at_loops) if at_loops else 0.0))
-        self.assertTrue(at_loops, "no map -> odom published at a loop optimisation")
-        self.assertGreater(max(at_loops), max(0.01, 10 * ordinary))
+        self.assertTrue(at_loops, "no pose published at a loop optimisation")
+        largest = max(at_loops)
+        self.assertGreater(largest, max(0.01, 10 * ordinary))
+        # ... and that transform went out on /tf: published with the loop's
+        # scan stamp, or re-sent by the node's timer with a newer one.
+        loop = max((t for t in self.loop_paths if t in steps), key=lambda t: steps[t])
+        self.assertTrue(any(d < min(0.01, largest / 3) for d in after(loop)),
+                        "the corrected map -> odom of the loop at %.3f was never on /tf" % loop)
 
         # The published poses are the offline runner's causal poses.
         with rosbag.Bag(self.args.bag) as bag:
