@@ -100,15 +100,35 @@ void PointCloudReference::insert(const std::vector<Vector2>& points,
   }
 }
 
+// Distance along one axis from coordinate v to cell i's interval
+// [i·size, (i+1)·size]: zero inside it.
+static double gapToCell(double v, int i, double size) {
+  return std::max({0.0, i * size - v, v - (i + 1) * size});
+}
+
 int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
   int cx, cy;
   cellOf(p, &cx, &cy);
   const int reach = static_cast<int>(std::ceil(max_distance / cell_size_));
+  // The nearest point of p's own cell bounds the answer: a neighbouring cell
+  // whose box lies farther cannot hold it and is not searched. (The slack
+  // covers rounding between cellOf's division and the box's products;
+  // the cells are searched in their usual order, so ties go as before.)
+  double bound = max_distance * max_distance;
+  const auto own = grid_.find(key(cx, cy));
+  if (own != grid_.end()) {
+    for (int j : own->second) bound = std::min(bound, (points_[j] - p).squaredNorm());
+  }
+  bound = bound * (1.0 + 1e-9) + 1e-12;
   int best = -1;
   double best_d2 = max_distance * max_distance;
   for (int ix = cx - reach; ix <= cx + reach; ++ix) {
+    const double dx = gapToCell(p.x(), ix, cell_size_);
+    if (dx * dx > bound) continue;
     for (int iy = cy - reach; iy <= cy + reach; ++iy) {
-      const auto it = grid_.find(key(ix, iy));
+      const double dy = gapToCell(p.y(), iy, cell_size_);
+      if (dx * dx + dy * dy > bound) continue;
+      const auto it = ix == cx && iy == cy ? own : grid_.find(key(ix, iy));
       if (it == grid_.end()) continue;
       for (int j : it->second) {
         const double d2 = (points_[j] - p).squaredNorm();

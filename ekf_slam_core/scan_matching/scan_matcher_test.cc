@@ -58,6 +58,48 @@ TEST(PointCloudReference, IsolatedPointsGetNoNormalAndAreDropped) {
   EXPECT_EQ(reference.size(), 0u);
 }
 
+// The grid search skips cells that cannot hold the answer; it must still
+// find the same distance as looking at every point, for gates of less and
+// more than a cell, near cell edges and far from every point.
+TEST(PointCloudReference, NearestAgreesWithLookingAtEveryPoint) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
+  std::uniform_real_distribution<double> heading(-kPi, kPi);
+  std::vector<Vector2> points;
+  for (int wall = 0; wall < 12; ++wall) {  // short walls, so that normals survive
+    const Vector2 start(coordinate(rng), coordinate(rng));
+    const double a = heading(rng);
+    for (int i = 0; i < 30; ++i) {
+      points.push_back(start + 0.03 * i * Vector2(std::cos(a), std::sin(a)));
+    }
+  }
+  const double cell = 0.5;
+  const PointCloudReference reference(points, 0.25, cell);
+  ASSERT_GT(reference.size(), 200u);
+  std::uniform_real_distribution<double> query(-4.0, 4.0);
+  int found = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vector2 q(query(rng), query(rng));
+    if (k % 4 == 0) q.x() = cell * std::round(q.x() / cell);  // on a cell edge
+    const double gate = k % 3 == 0 ? 0.15 : (k % 3 == 1 ? 0.5 : 1.2);
+    double best = gate * gate;
+    bool any = false;
+    for (const Vector2& p : reference.points()) {
+      const double d2 = (p - q).squaredNorm();
+      if (d2 <= best) {
+        best = d2;
+        any = true;
+      }
+    }
+    const int j = reference.nearest(q, gate);
+    ASSERT_EQ(j >= 0, any) << "query " << q.transpose() << " gate " << gate;
+    if (!any) continue;
+    ++found;
+    EXPECT_EQ((reference.points()[j] - q).squaredNorm(), best);
+  }
+  EXPECT_GT(found, 5000);
+}
+
 TEST(MatchPoints, RecoversAKnownMotionFromAWrongGuess) {
   std::mt19937 rng(7);
   const sim::PolygonWorld world = room();
