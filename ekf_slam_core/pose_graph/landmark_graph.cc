@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <optional>
 
 namespace ekf_slam {
 
@@ -103,10 +104,31 @@ namespace {
 // unknowns start at the given offsets (−1: a fixed pose, no unknowns). H is
 // kept as its lower triangle only: SimplicialLDLT (Lower) reads nothing
 // else, and half the entries halve the assembly.
+//
+// The pattern of H is the same at every step of an optimisation, only its
+// values change. The first assembly collects triplets and notes where each
+// one lands in the compressed matrix (AssemblyPattern); later assemblies
+// that add the same entries in the same order write straight into those
+// slots. Each slot receives its contributions in the order setFromTriplets
+// sums duplicates, so H is bit for bit the same either way.
+struct AssemblyPattern {
+  Eigen::SparseMatrix<double> H;  // compressed, every diagonal entry explicit
+  std::vector<int> slot;          // per entry added: its index in H's values
+};
+
 class NormalEquations {
  public:
-  NormalEquations(int unknowns, size_t expected_entries) : b_(Eigen::VectorXd::Zero(unknowns)) {
-    triplets_.reserve(expected_entries);
+  // With `pattern` null the entries are collected as triplets; otherwise
+  // they are added into a copy of pattern->H, zeroed, in the order the
+  // pattern was recorded in.
+  NormalEquations(int unknowns, size_t expected_entries, const AssemblyPattern* pattern)
+      : b_(Eigen::VectorXd::Zero(unknowns)), pattern_(pattern) {
+    if (pattern_) {
+      H_ = pattern_->H;
+      std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
+    } else {
+      triplets_.reserve(expected_entries);
+    }
   }
 
   template <typename JacobianA, typename JacobianB, typename Information, typename Error>
@@ -130,10 +152,33 @@ class NormalEquations {
     if (offset >= 0) b_.segment(offset, J.cols()) += J.transpose() * omega * e;
   }
 
-  Eigen::SparseMatrix<double> matrix() const {
-    Eigen::SparseMatrix<double> H(b_.size(), b_.size());
-    H.setFromTriplets(triplets_.begin(), triplets_.end());
-    return H;
+  // H with an explicit entry on every diagonal (an unknown no edge touches
+  // stays regular), compressed. With a pattern: false when the entries
+  // added were not those of the pattern (then assemble afresh without one).
+  bool finish(Eigen::SparseMatrix<double>* H, AssemblyPattern* record) {
+    if (pattern_) {
+      if (added_ != pattern_->slot.size() || mismatch_) return false;
+      for (int k = 0; k < H_.outerSize(); ++k) H_.coeffRef(k, k) += 0.0;
+      *H = std::move(H_);
+      return true;
+    }
+    H->resize(b_.size(), b_.size());
+    H->setFromTriplets(triplets_.begin(), triplets_.end());
+    for (int k = 0; k < b_.size(); ++k) H->coeffRef(k, k) += 0.0;
+    H->makeCompressed();
+    if (record) {
+      record->H = *H;
+      record->slot.resize(triplets_.size());
+      const int* outer = H->outerIndexPtr();
+      const int* inner = H->innerIndexPtr();
+      for (size_t t = 0; t < triplets_.size(); ++t) {
+        const int col = triplets_[t].col();
+        const int* at =
+            std::lower_bound(inner + outer[col], inner + outer[col + 1], triplets_[t].row());
+        record->slot[t] = static_cast<int>(at - inner);
+      }
+    }
+    return true;
   }
   const Eigen::VectorXd& gradient() const { return b_; }
 
@@ -143,13 +188,27 @@ class NormalEquations {
     if (row < 0 || col < 0 || row + block.rows() - 1 < col) return;
     for (int i = 0; i < block.rows(); ++i) {
       for (int j = 0; j < block.cols(); ++j) {
-        if (row + i >= col + j) triplets_.emplace_back(row + i, col + j, block(i, j));
+        if (row + i < col + j) continue;
+        if (!pattern_) {
+          triplets_.emplace_back(row + i, col + j, block(i, j));
+        } else if (added_ < pattern_->slot.size()) {
+          // The slot must hold this very entry, or the edges differ.
+          const int slot = pattern_->slot[added_++];
+          mismatch_ |= H_.innerIndexPtr()[slot] != row + i;
+          H_.valuePtr()[slot] += block(i, j);
+        } else {
+          mismatch_ = true;
+        }
       }
     }
   }
 
   std::vector<Eigen::Triplet<double>> triplets_;
   Eigen::VectorXd b_;
+  const AssemblyPattern* pattern_;
+  Eigen::SparseMatrix<double> H_;
+  size_t added_ = 0;
+  bool mismatch_ = false;
 };
 
 }  // namespace
@@ -179,9 +238,10 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
   double lambda = options.initial_lambda;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   bool pattern_known = false;
-  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    NormalEquations normal(unknowns,
-                           36 * (relatives_.size() + priors_.size()) + 25 * observations_.size());
+  AssemblyPattern pattern;
+  bool have_pattern = false;
+  // The normal equations at the current estimate, into H and `normal`.
+  auto assemble = [&](NormalEquations& normal) {
     for (const RelativePoseEdge& edge : relatives_) {
       Matrix3 J_from, J_to;
       const Vector3 e = relativePoseError(poses_[edge.from], poses_[edge.to], edge, &J_from, &J_to);
@@ -207,21 +267,33 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
       normal.addPair(pose_offset[edge.pose], J_pose, landmarkOffset(edge.landmark), J_landmark,
                      omega, e);
     }
+  };
+  const size_t expected_entries =
+      36 * (relatives_.size() + priors_.size()) + 25 * observations_.size();
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    Eigen::SparseMatrix<double> H;
+    std::optional<NormalEquations> normal;
+    normal.emplace(unknowns, expected_entries, have_pattern ? &pattern : nullptr);
+    assemble(*normal);
+    if (!normal->finish(&H, &pattern)) {
+      // An edge dropped out or came back (its error could not be formed):
+      // a new pattern, analysed afresh.
+      normal.emplace(unknowns, expected_entries, nullptr);
+      assemble(*normal);
+      normal->finish(&H, &pattern);
+      pattern_known = false;
+    }
+    have_pattern = true;
     // The sparsity pattern of H is the same at every step (only values
     // change), so the ordering and symbolic factorisation are done once.
-    Eigen::SparseMatrix<double> H = normal.matrix();
-    // Every unknown gets an explicit diagonal entry so that the pattern is
-    // fixed and an unobserved unknown (no edge) stays regular.
-    for (int k = 0; k < unknowns; ++k) H.coeffRef(k, k) += 0.0;
-    H.makeCompressed();
     if (!pattern_known) {
       solver.analyzePattern(H);
-      pattern_known = true;
+      pattern_known = false;
     }
 
     const double cost_before = summary.final_cost;
     const DampedStep step = levenbergMarquardtStep(
-        H, normal.gradient(), options.initial_lambda, &lambda, &solver,
+        H, normal->gradient(), options.initial_lambda, &lambda, &solver,
         [&](const Eigen::VectorXd& delta) {
           std::vector<Pose2> poses = poses_;
           std::vector<Vector2> landmarks = landmarks_;

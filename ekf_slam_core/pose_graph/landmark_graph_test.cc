@@ -166,6 +166,41 @@ TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
   }
 }
 
+// A landmark that starts on a laser has no observation error from that
+// pose: the edge is left out of the first normal equations and enters once
+// the landmark has moved, which changes the pattern of H. The solver must
+// notice (a new pattern, analysed afresh) and still find the truth.
+TEST(LandmarkGraph, AnEdgeThatEntersLaterChangesThePatternAndIsSolved) {
+  const SmallWorld truth;
+  std::vector<Pose2> motion;
+  for (size_t i = 1; i < truth.poses.size(); ++i) {
+    motion.push_back(between(truth.poses[i - 1], truth.poses[i]));
+  }
+  std::vector<RangeBearing> z;
+  for (const Pose2& x : truth.poses) {
+    for (const Vector2& m : truth.landmarks) {
+      RangeBearing r;
+      ASSERT_TRUE(predictPointObservation(x, kLaser, m, &r));
+      z.push_back(r);
+    }
+  }
+  std::vector<Pose2> poses = truth.poses;
+  poses[1] = Pose2(1.2, -0.1, 0.1);
+  std::vector<Vector2> landmarks = {compose(poses[1], kLaser).translation(), Vector2(3.4, -0.6)};
+  Vector2 e;
+  ASSERT_FALSE(observationError(poses[1], kLaser, landmarks[0], z[2], &e));
+  LandmarkGraph graph = buildGraph(truth, motion, z, poses, landmarks);
+  const LandmarkGraphSummary summary = graph.optimize(LandmarkGraphOptions());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_LT(summary.final_cost, 1e-12);
+  for (size_t i = 0; i < truth.poses.size(); ++i) {
+    EXPECT_LT((graph.poses()[i].vector() - truth.poses[i].vector()).norm(), 1e-6);
+  }
+  for (size_t j = 0; j < truth.landmarks.size(); ++j) {
+    EXPECT_LT((graph.landmarks()[j] - truth.landmarks[j]).norm(), 1e-6);
+  }
+}
+
 // Noisy measurements: the sparse LM optimum must be the stationary point of
 // the dense problem: a dense Gauss–Newton on the stacked whitened residuals
 // with numerical Jacobians, started from the sparse answer, does not move.
