@@ -15,9 +15,11 @@ IterationReport runIteration(EkfSlam& filter, const AssociationOptions& associat
 }
 
 void observe(EkfSlam& filter, const AssociationOptions& association,
-             const std::vector<PointObservation>& observations, IterationReport* out) {
+             const std::vector<PointObservation>& observations, IterationReport* out,
+             const Associator& associator) {
   IterationReport& report = *out;
-  report.association = associate(filter, observations, association);
+  report.association = associator ? associator(filter, observations, association)
+                                  : associate(filter, observations, association);
   report.matches = report.association.matches();
   report.update_status = filter.update(observations, report.matches, &report.nis);
   if (report.update_status != FilterStatus::kOk) {

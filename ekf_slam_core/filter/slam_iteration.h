@@ -4,6 +4,7 @@
 // the live node, the offline runner, the demo and the benchmarks.
 #pragma once
 
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -36,9 +37,16 @@ IterationReport runIteration(EkfSlam& filter, const AssociationOptions& associat
                              const Pose2& odom_previous, const Pose2& odom_current, double dt,
                              const std::vector<PointObservation>& observations);
 
+// An association in place of associate() (the same contract): e.g. one
+// that never pairs across rooms (mecp/room_gating.h).
+using Associator = std::function<AssociationResult(
+    const EkfSlam&, const std::vector<PointObservation>&, const AssociationOptions&)>;
+
 // The observation half of an iteration (associate, update, augment, prune),
 // for a caller that ran the prediction itself or has none (the first scan).
+// `associator`, when given, replaces associate().
 void observe(EkfSlam& filter, const AssociationOptions& association,
-             const std::vector<PointObservation>& observations, IterationReport* report);
+             const std::vector<PointObservation>& observations, IterationReport* report,
+             const Associator& associator = nullptr);
 
 }  // namespace ekf_slam

@@ -391,4 +391,19 @@ void LineLandmarks::refreshSupport(const EkfSlam& filter) {
   }
 }
 
+std::vector<Segment2> LineLandmarks::walls(const EkfSlam& filter) const {
+  std::vector<int> ids;
+  for (const auto& entry : tracks_) {
+    if (filter.slotOf(entry.first) >= 0) ids.push_back(entry.first);
+  }
+  std::sort(ids.begin(), ids.end());
+  std::vector<Segment2> out;
+  out.reserve(ids.size());
+  for (int id : ids) {
+    const Track& track = tracks_.at(id);
+    out.push_back({track.first, track.last});
+  }
+  return out;
+}
+
 }  // namespace ekf_slam

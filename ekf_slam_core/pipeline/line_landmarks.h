@@ -38,6 +38,7 @@
 #include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
 #include "ekf_slam_core/geometry/option_fields.h"
+#include "ekf_slam_core/mecp/doorways.h"
 
 namespace ekf_slam {
 
@@ -115,6 +116,10 @@ class LineLandmarks {
 
   // Per line landmark id, its seen extent along the current estimate.
   const std::unordered_map<int, LineSupport>& support() const { return support_; }
+
+  // The walls mapped so far: per line landmark in the filter (by id), the
+  // stretch of it sighted, map frame, from its two extreme sighted points.
+  std::vector<Segment2> walls(const EkfSlam& filter) const;
 
  private:
   struct Track {

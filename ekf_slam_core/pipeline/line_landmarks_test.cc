@@ -289,6 +289,73 @@ TEST(MecpInThePipeline, CornersAroundTheRobotGiveAnMecpUpdatePerScan) {
   EXPECT_LT(mecp_covariance.trace(), point_covariance.trace());
 }
 
+// Two rooms joined by a door, the robot driving from one into the other:
+// the walls it maps give a doorway and two rooms, and the corners of each
+// room carry that room's label, so that no association pairs across the
+// dividing wall. The estimate is as good as without the gate.
+TEST(RoomGatingInThePipeline, MappedWallsGiveTwoRoomsAndTheirCornersTheirLabels) {
+  sim::PolygonWorld world;
+  world.addPolygon({{-4.0, -2.5}, {4.0, -2.5}, {4.0, 2.5}, {-4.0, 2.5}});
+  world.addSegment({0.0, -2.5}, {0.0, -0.45});  // the dividing wall, a 0.9 m door in it
+  world.addSegment({0.0, 0.45}, {0.0, 2.5});
+  world.addBox({-2.5, 1.5}, 0.4, 0.4);  // cartons: corners in each room
+  world.addBox({2.5, -1.5}, 0.4, 0.4);
+  sim::DriveOptions drive_options;
+  drive_options.start = Pose2(-3.2, 0.0, 0.0);
+  drive_options.laser = Pose2(0.16, 0.0, 0.0);
+  drive_options.seed = 3;
+  // Through the door, turn round, and back into the first room.
+  const std::vector<sim::DriveSegment> segments = {
+      {0.3, 0.0, 20.0}, {0.0, 0.5, kPi / 0.5}, {0.3, 0.0, 14.0}, {0.0, 0.5, kPi / 0.5}};
+  const sim::SimulatedDrive drive = sim::simulateDrive(world, segments, drive_options);
+  const Pose2 world_from_map = drive.truth.front();
+  const Pose2 truth = between(drive.truth.front(), drive.truth.back());
+  double error[2] = {0.0, 0.0};
+  for (bool gated : {false, true}) {
+    SCOPED_TRACE(gated ? "gated" : "not gated");
+    PipelineOptions options = lineOptions(LandmarkSet::kPointsAndLines, drive_options.laser);
+    options.rooms.enabled = gated;
+    ASSERT_EQ(options.validate(), "");
+    SlamPipeline pipeline(options);
+    for (size_t i = 0; i < drive.scans.size(); ++i) {
+      pipeline.processScan(drive.scans[i], drive.odometry[i]);
+    }
+    const EkfSlam& filter = pipeline.filter();
+    error[gated] = (filter.pose().translation() - truth.translation()).norm();
+    if (!gated) {
+      EXPECT_EQ(pipeline.roomGate(), nullptr);
+      continue;
+    }
+    const PipelineCounters& c = pipeline.counters();
+    EXPECT_GT(c.room_rebuilds, 10);
+    EXPECT_GE(c.doorways, 1);
+    EXPECT_GE(c.rooms, 2);
+    const RoomGate* gate = pipeline.roomGate();
+    ASSERT_NE(gate, nullptr);
+    // Corners well inside each room: one label per room, the two differ.
+    std::vector<int> left, right;
+    for (const LandmarkInfo& info : filter.landmarks()) {
+      if (info.kind != LandmarkKind::kPoint) continue;
+      const Vector2 at =
+          transformFrom(world_from_map, filter.landmarkPosition(filter.slotOf(info.id)));
+      const std::vector<int> rooms = gate->landmarkRooms(info.id);
+      if (std::abs(at.x()) < 0.5 || rooms.size() != 1) continue;
+      (at.x() < 0.0 ? left : right).push_back(rooms.front());
+    }
+    std::cout << c.room_rebuilds << " rebuilds, " << c.rooms << " rooms, " << c.doorways
+              << " doorways; corners labelled " << left.size() << " left, " << right.size()
+              << " right; pose error " << error[false] << " m without the gate, " << error[true]
+              << " m with it\n";
+    ASSERT_GE(left.size(), 2u);
+    ASSERT_GE(right.size(), 2u);
+    for (int room : left) EXPECT_EQ(room, left.front());
+    for (int room : right) EXPECT_EQ(room, right.front());
+    EXPECT_NE(left.front(), right.front());
+  }
+  EXPECT_LT(error[true], 0.1);
+  EXPECT_LT(error[true], error[false] + 0.02);
+}
+
 TEST(LineLandmarks, TheLandmarkSettingIsValidated) {
   PipelineOptions options;
   EXPECT_EQ(options.landmarks, LandmarkSet::kPoints);

@@ -1,6 +1,7 @@
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 
 #include <cmath>
+#include <iterator>
 #include <sstream>
 
 #include "ekf_slam_core/mecp/mecp_update.h"
@@ -52,6 +53,14 @@ std::string PipelineOptions::validate() const {
   if (!error.empty()) return "loop_closure: " + error;
   error = smoother.validate();
   if (!error.empty()) return "smoother: " + error;
+  error = rooms.doorways.validate();
+  if (!error.empty()) return "rooms.doorways: " + error;
+  error = rooms.map.validate();
+  if (!error.empty()) return "rooms.map: " + error;
+  if (rooms.enabled && landmarks != LandmarkSet::kPointsAndLines &&
+      landmarks != LandmarkSet::kPointsAndLineAngles) {
+    return "rooms.enabled needs walls: landmarks points+lines or points+lines_theta";
+  }
   return "";
 }
 
@@ -337,7 +346,26 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     out->observation_feature.push_back(i);
   }
   out->iteration.predict_status = FilterStatus::kOk;
-  observe(filter_, options_.association, out->observations, &out->iteration);
+  Associator in_rooms;
+  if (room_gate_) {
+    in_rooms = [this](const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                      const AssociationOptions& association) {
+      return associateInRooms(filter, observations, association, *room_gate_);
+    };
+  }
+  observe(filter_, options_.association, out->observations, &out->iteration, in_rooms);
+  if (options_.rooms.enabled) {
+    // New landmarks take the room they were seen from.
+    const Vector2 laser = compose(filter_.pose(), options_.filter.laser_pose).translation();
+    for (const PointMatch& created : out->iteration.created) {
+      const int slot = filter_.slotOf(created.landmark_id);
+      if (slot < 0) continue;
+      landmark_seen_from_[created.landmark_id] = laser;
+      if (room_gate_) {
+        room_gate_->labelLandmark(created.landmark_id, filter_.landmarkPosition(slot), laser);
+      }
+    }
+  }
   if (lines_) {
     lines_->observe(filter_, out->features, out->observation_feature, out->iteration, &out->lines);
   }
@@ -370,9 +398,43 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   }
   counters_.new_landmarks += static_cast<long>(out->iteration.new_landmark_ids.size());
   for (double nis : out->iteration.nis) counters_.nis_sum += nis;
+  if (options_.rooms.enabled && ++iterations_since_rooms_ >= options_.rooms.rebuild_interval) {
+    rebuildRooms();
+  }
   out->outcome = ScanOutcome::kIterated;
   out->pose = filter_.pose();
   out->pose_covariance = filter_.poseCovariance();
+}
+
+// The walls mapped so far (the line landmarks' sighted stretches) with
+// their doorways make the rooms. The map moves as the filter corrects it,
+// so the rooms are drawn afresh and every point landmark is labelled again
+// from where it was first seen. A map that cannot be drawn (no walls yet,
+// an extent beyond rooms.map.max_cells) leaves the association ungated.
+void SlamPipeline::rebuildRooms() {
+  iterations_since_rooms_ = 0;
+  ++counters_.room_rebuilds;
+  for (auto it = landmark_seen_from_.begin(); it != landmark_seen_from_.end();) {
+    it = filter_.slotOf(it->first) < 0 ? landmark_seen_from_.erase(it) : std::next(it);
+  }
+  const std::vector<Segment2> walls = lines_->walls(filter_);
+  const std::vector<Doorway> doorways = findDoorways(walls, options_.rooms.doorways);
+  RoomMap rooms;
+  const std::string error =
+      walls.empty() ? "no walls mapped" : rooms.build(walls, doorways, options_.rooms.map);
+  if (!error.empty()) {
+    room_gate_.reset();
+    ++counters_.room_rebuild_failures;
+    counters_.rooms = 0;
+    counters_.doorways = 0;
+    return;
+  }
+  counters_.rooms = rooms.roomCount();
+  counters_.doorways = static_cast<int>(doorways.size());
+  room_gate_ = std::make_unique<RoomGate>(std::move(rooms), doorways, options_.rooms.gate);
+  for (const auto& [id, seen_from] : landmark_seen_from_) {
+    room_gate_->labelLandmark(id, filter_.landmarkPosition(filter_.slotOf(id)), seen_from);
+  }
 }
 
 int SlamPipeline::pruneRarelySeen() {

@@ -34,6 +34,7 @@
 #include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/back_end.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
+#include "ekf_slam_core/mecp/room_gating.h"
 #include "ekf_slam_core/pipeline/line_landmarks.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 #include "ekf_slam_core/smoother/full_smoother.h"
@@ -48,6 +49,31 @@ constexpr double kMaxOdometryCoordinate = 1e6;  // m: no robot drives 1,000 km f
 // would carry the scan matcher's grids past what an index can hold). A scan
 // whose odometry is not usable gets no ScanRecord.
 bool usableOdometry(const Pose2& odometry);
+
+// Room gating of the point association (thesis §4.4.5) from the walls the
+// filter has mapped: every rebuild_interval iterations the line landmarks'
+// sighted stretches are taken as walls, doorways are found among them and
+// the free space between them is split into rooms (mecp/doorways.h); each
+// point landmark is labelled with the room it was seen from, and an
+// observation is associated only with landmarks of its own rooms
+// (associateInRooms, mecp/room_gating.h). Needs line landmarks
+// (landmarks: points+lines or points+lines_theta).
+struct RoomGatingOptions {
+  bool enabled = false;
+  int rebuild_interval = 20;  // iterations between rebuilds of the rooms
+  DoorwayOptions doorways;
+  RoomMapOptions map;
+  RoomGateOptions gate;
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.flag("enabled", enabled);
+    v.integer("rebuild_interval", rebuild_interval, Bounds::closed(1, 1e6, "iterations"));
+    v.section("doorways", doorways);
+    v.section("map", map);
+    v.section("gate", gate);
+  }
+};
 
 struct PipelineOptions {
   FeatureOptions features;
@@ -93,6 +119,7 @@ struct PipelineOptions {
   // landmark bound.
   LandmarkSet landmarks = LandmarkSet::kPoints;
   LineLandmarkOptions lines;
+  RoomGatingOptions rooms;
   // Control source. With scan_matching.enabled every scan is first aligned to
   // the last key scans (ScanMatchingOdometry) and the scan-matched pose takes
   // the place of the raw odometry pose everywhere below: the filter's control
@@ -128,6 +155,7 @@ struct PipelineOptions {
               {LandmarkSet::kPointsAndLineAngles, "points+lines_theta"},
               {LandmarkSet::kPointsAndMecp, "points+mecp"}});
     v.section("lines", lines);
+    v.section("rooms", rooms);
   }
 
   static MotionNoiseOptions defaultScanMatchedMotionNoise();
@@ -197,6 +225,10 @@ struct PipelineCounters {
   long scan_match_refusals = 0;   // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
   long reanchors = 0;                     // times the filter took the loop-closed geometry
+  long room_rebuilds = 0;                 // rooms.enabled: times the rooms were rebuilt …
+  long room_rebuild_failures = 0;         // … and found no usable map (no walls yet, too large)
+  int rooms = 0;                          // rooms in the last rebuild (0: no gating now)
+  int doorways = 0;                       // doorways in the last rebuild
   double nis_sum = 0.0;                   // over all matches
 };
 
@@ -253,6 +285,9 @@ class SlamPipeline {
   // from a map file (seedFilter, before the first scan); ignored when the
   // pipeline uses no lines.
   void seedLineSupport(const std::unordered_map<int, LineSupport>& support);
+  // rooms.enabled: the rooms of the last rebuild and the landmarks' labels;
+  // null before the first rebuild that found a map (association ungated).
+  const RoomGate* roomGate() const { return room_gate_.get(); }
 
   // map → odom, so that map → odom → base_link is the estimate at the last
   // iteration, with odom → base_link the robot's raw odometry.
@@ -314,6 +349,8 @@ class SlamPipeline {
   // update (ekf_slam_core/mecp/mecp_update.h), counted.
   void updateMecp(const ScanResult& result);
   void trackKeyScans();
+  // rooms.enabled: the rooms from the walls mapped now; every point landmark relabelled.
+  void rebuildRooms();
   void reanchorFilter(const Pose2& causal, const Pose2& published);
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;
@@ -323,8 +360,12 @@ class SlamPipeline {
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
   std::unique_ptr<LoopClosureBackEnd> back_end_;        // null when loop closure is off
   std::unique_ptr<LineLandmarks> lines_;                // null with points only
-  std::shared_ptr<const BackEndView> view_;             // the back end as the last scan saw it
-  long loops_seen_ = 0;                                 // accepted loops in that view
+  std::unique_ptr<RoomGate> room_gate_;                 // rooms.enabled, once a rebuild found rooms
+  long iterations_since_rooms_ = 0;
+  // rooms.enabled: per point landmark id, where the laser was when it was created
+  std::unordered_map<int, Vector2> landmark_seen_from_;
+  std::shared_ptr<const BackEndView> view_;  // the back end as the last scan saw it
+  long loops_seen_ = 0;                      // accepted loops in that view
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;

@@ -523,6 +523,14 @@ int main(int argc, char** argv) {
                        std::to_string(c.mecp_skipped) + " skipped (centre too near, or refused)"
                  : std::string("off"))
          << "\n"
+         << "room gating (rooms.enabled): "
+         << (config.pipeline.rooms.enabled
+                 ? std::to_string(c.room_rebuilds) + " rebuilds (" +
+                       std::to_string(c.room_rebuild_failures) +
+                       " without a usable map), last: " + std::to_string(c.rooms) + " rooms, " +
+                       std::to_string(c.doorways) + " doorways"
+                 : std::string("off"))
+         << "\n"
          << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
          << (smoother.reassociated
