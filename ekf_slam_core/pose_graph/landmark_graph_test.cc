@@ -136,34 +136,46 @@ LandmarkGraph buildGraph(const SmallWorld& truth, const std::vector<Pose2>& moti
   return graph;
 }
 
-TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
-  const SmallWorld truth;
-  std::vector<Pose2> motion;
+// The world's odometry increments and every pose's reading of every landmark, exact.
+bool exactMeasurements(const SmallWorld& truth, std::vector<Pose2>* motion,
+                       std::vector<RangeBearing>* z) {
   for (size_t i = 1; i < truth.poses.size(); ++i) {
-    motion.push_back(between(truth.poses[i - 1], truth.poses[i]));
+    motion->push_back(between(truth.poses[i - 1], truth.poses[i]));
   }
-  std::vector<RangeBearing> z;
   for (const Pose2& x : truth.poses) {
     for (const Vector2& m : truth.landmarks) {
       RangeBearing r;
-      ASSERT_TRUE(predictPointObservation(x, kLaser, m, &r));
-      z.push_back(r);
+      if (!predictPointObservation(x, kLaser, m, &r)) return false;
+      z->push_back(r);
     }
   }
+  return true;
+}
+
+// Optimised from exact measurements, the graph ends at the truth.
+void expectSolvedToTheTruth(LandmarkGraph graph, const SmallWorld& truth, double max_cost,
+                            double tolerance) {
+  const LandmarkGraphSummary summary = graph.optimize(LandmarkGraphOptions());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_LT(summary.final_cost, max_cost);
+  for (size_t i = 0; i < truth.poses.size(); ++i) {
+    EXPECT_LT((graph.poses()[i].vector() - truth.poses[i].vector()).norm(), tolerance);
+  }
+  for (size_t j = 0; j < truth.landmarks.size(); ++j) {
+    EXPECT_LT((graph.landmarks()[j] - truth.landmarks[j]).norm(), tolerance);
+  }
+}
+
+TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
+  const SmallWorld truth;
+  std::vector<Pose2> motion;
+  std::vector<RangeBearing> z;
+  ASSERT_TRUE(exactMeasurements(truth, &motion, &z));
   std::vector<Pose2> poses = truth.poses;
   poses[1] = Pose2(1.2, -0.1, 0.1);
   poses[2] = Pose2(1.7, 0.7, 0.7);
   std::vector<Vector2> landmarks = {Vector2(1.0, 2.5), Vector2(3.4, -0.6)};
-  LandmarkGraph graph = buildGraph(truth, motion, z, poses, landmarks);
-  const LandmarkGraphSummary summary = graph.optimize(LandmarkGraphOptions());
-  EXPECT_TRUE(summary.converged);
-  EXPECT_LT(summary.final_cost, 1e-16);
-  for (size_t i = 0; i < truth.poses.size(); ++i) {
-    EXPECT_LT((graph.poses()[i].vector() - truth.poses[i].vector()).norm(), 1e-8);
-  }
-  for (size_t j = 0; j < truth.landmarks.size(); ++j) {
-    EXPECT_LT((graph.landmarks()[j] - truth.landmarks[j]).norm(), 1e-8);
-  }
+  expectSolvedToTheTruth(buildGraph(truth, motion, z, poses, landmarks), truth, 1e-16, 1e-8);
 }
 
 // A landmark that starts on a laser has no observation error from that
@@ -173,32 +185,14 @@ TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
 TEST(LandmarkGraph, AnEdgeThatEntersLaterChangesThePatternAndIsSolved) {
   const SmallWorld truth;
   std::vector<Pose2> motion;
-  for (size_t i = 1; i < truth.poses.size(); ++i) {
-    motion.push_back(between(truth.poses[i - 1], truth.poses[i]));
-  }
   std::vector<RangeBearing> z;
-  for (const Pose2& x : truth.poses) {
-    for (const Vector2& m : truth.landmarks) {
-      RangeBearing r;
-      ASSERT_TRUE(predictPointObservation(x, kLaser, m, &r));
-      z.push_back(r);
-    }
-  }
+  ASSERT_TRUE(exactMeasurements(truth, &motion, &z));
   std::vector<Pose2> poses = truth.poses;
   poses[1] = Pose2(1.2, -0.1, 0.1);
   std::vector<Vector2> landmarks = {compose(poses[1], kLaser).translation(), Vector2(3.4, -0.6)};
   Vector2 e;
   ASSERT_FALSE(observationError(poses[1], kLaser, landmarks[0], z[2], &e));
-  LandmarkGraph graph = buildGraph(truth, motion, z, poses, landmarks);
-  const LandmarkGraphSummary summary = graph.optimize(LandmarkGraphOptions());
-  EXPECT_TRUE(summary.converged);
-  EXPECT_LT(summary.final_cost, 1e-12);
-  for (size_t i = 0; i < truth.poses.size(); ++i) {
-    EXPECT_LT((graph.poses()[i].vector() - truth.poses[i].vector()).norm(), 1e-6);
-  }
-  for (size_t j = 0; j < truth.landmarks.size(); ++j) {
-    EXPECT_LT((graph.landmarks()[j] - truth.landmarks[j]).norm(), 1e-6);
-  }
+  expectSolvedToTheTruth(buildGraph(truth, motion, z, poses, landmarks), truth, 1e-12, 1e-6);
 }
 
 // Noisy measurements: the sparse LM optimum must be the stationary point of
