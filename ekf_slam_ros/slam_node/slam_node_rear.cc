@@ -122,26 +122,29 @@ void SlamNode::processWithRear(const PendingInput& pending, const Pose2& odometr
 
   if (second.scan != &none) {
     ++merged_scans_;
+  } else if (!candidates.empty()) {
+    // Logged per reason, so that one does not hide the other.
+    ++alone_no_transform_;
+    ROS_WARN_THROTTLE(2.0,
+                      "ekf_slam_node: scan at %.3f used without the rear laser: the transforms "
+                      "of its rear scan are missing: %s",
+                      stamp.toSec(), missing.c_str());
   } else {
-    std::ostringstream why;
-    why.setf(std::ios::fixed);
-    why.precision(3);
-    if (!candidates.empty()) {
-      ++alone_no_transform_;
-      why << "the transforms of its rear scan are missing: " << missing;
-    } else {
-      ++alone_no_rear_;
-      why << "no rear scan on " << rear_subscriber_.getTopic() << " within rear_scan_tolerance "
-          << params_.rear_scan_tolerance << " s";
-      double nearest = -1.0;
-      for (const RearScan& rear : rear_scans_) {
-        const double gap = std::abs((rear.stamp - stamp).toSec());
-        if (nearest < 0.0 || gap < nearest) nearest = gap;
-      }
-      if (nearest >= 0.0) why << " (the nearest is " << nearest << " s away)";
+    ++alone_no_rear_;
+    std::ostringstream nearest;
+    nearest.setf(std::ios::fixed);
+    nearest.precision(3);
+    double gap = -1.0;
+    for (const RearScan& rear : rear_scans_) {
+      const double g = std::abs((rear.stamp - stamp).toSec());
+      if (gap < 0.0 || g < gap) gap = g;
     }
-    ROS_WARN_THROTTLE(2.0, "ekf_slam_node: scan at %.3f used without the rear laser: %s",
-                      stamp.toSec(), why.str().c_str());
+    if (gap >= 0.0) nearest << " (the nearest is " << gap << " s away)";
+    ROS_WARN_THROTTLE(2.0,
+                      "ekf_slam_node: scan at %.3f used without the rear laser: no rear scan on "
+                      "%s within rear_scan_tolerance %.3f s%s",
+                      stamp.toSec(), rear_subscriber_.getTopic().c_str(),
+                      params_.rear_scan_tolerance, nearest.str().c_str());
   }
   // Scans come in stamp order: a rear scan older than this one's window
   // can serve no later scan.
