@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """The nodes refuse bad parameters at start-up.
 
-ekf_slam_node and feature_node, and the two drivers (p3dx_driver_node,
-lms200_node), which share the same parameter reader.
+ekf_slam_node and feature_node, the two drivers (p3dx_driver_node,
+lms200_node) and simulator_node, which share the same parameter reader.
 
 Each case starts the node with one bad private parameter (or a bad
 configuration file) against the rostest roscore and asserts that it exits
@@ -77,6 +77,18 @@ class BadParameters(unittest.TestCase):
     def test_features_input_with_scan_matching_names_the_conflict(self):
         # The built-in defaults have scan matching on; it needs the scans.
         self.check("ekf_slam_node", "scan_matching.enabled", "_input:=features")
+
+    def test_rear_laser_parameters_name_the_key(self):
+        # The merge works on the raw scans, from another topic than the scan's.
+        self.check("ekf_slam_node", "rear_scan_topic", "_rear_scan_topic:=scan_rear",
+                   "_input:=features")
+        self.check("ekf_slam_node", "rear_scan_topic", "_rear_scan_topic:=scan")
+        self.check("ekf_slam_node", "merged_angle_increment", "_merged_angle_increment:=2.0")
+        self.check("ekf_slam_node", "rear_scan_tolerance", "_rear_scan_tolerance:=-0.1")
+        # The simulator's rear scanner needs its mount.
+        self.check("simulator_node", "rear_calibration_file",
+                   "_rear_lms200_link:=/tmp/ekf_slam_params_rear", "_world_file:=/nonexistent",
+                   "_calibration_file:=/nonexistent")
 
     def test_unreadable_initial_map_is_reported(self):
         self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -30,6 +31,19 @@ TEST(LaserMountTest, ShippedFileLoads) {
   EXPECT_NEAR(mount.x, 0.16, 1e-9);
   EXPECT_NEAR(mount.y, 0.0, 1e-9);
   EXPECT_NEAR(mount.yaw, 0.0, 1e-9);
+}
+
+TEST(LaserMountTest, ShippedRearFileLoads) {
+  LaserMount mount;
+  ASSERT_EQ(loadLaserMount(kSource + "/config/calibration_rear.yaml", &mount), "");
+  EXPECT_EQ(mount.parent_frame, "base_link");
+  EXPECT_EQ(mount.child_frame, "laser_rear");
+  // Behind the axle on the centre line, facing backwards, and inside the
+  // P3-DX's body (its rear end is 0.273 m behind the axle).
+  EXPECT_NEAR(mount.x, -0.251, 1e-9);
+  EXPECT_GT(mount.x, -0.273);
+  EXPECT_NEAR(mount.y, 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(mount.pose().theta), kPi, 1e-9);
 }
 
 TEST(LaserMountTest, ReadsEveryKey) {

@@ -1,13 +1,15 @@
 // simulator_node: a simulated P3-DX with an LMS200 in a world image, behind
 // two pseudo-terminals, so that the real driver nodes run unchanged: the
-// same graph as on the robot, only the serial ports differ.
+// same graph as on the robot, only the serial ports differ. Optionally a
+// second, rear LMS200 on a third pseudo-terminal (~rear_lms200_link).
 //
 // One process, one world, one true pose: the P3-DX emulator drives the true
 // pose (blocked by the walls through a motion hook with the robot radius);
 // the LMS200 emulator ray-casts from the laser pose = true pose ∘ mount,
 // the mount read from config/calibration.yaml (the file the SLAM side's tf
-// comes from). Both are stepped on one monotonic clock; the loop sleeps to
-// the next deadline.
+// comes from); the rear one likewise from its own mount
+// (~rear_calibration_file, config/calibration_rear.yaml in sim.launch). All
+// are stepped on one monotonic clock; the loop sleeps to the next deadline.
 //
 // Publishes the ground truth (docs/simulation.md):
 //   ground_truth/odom   nav_msgs/Odometry, frame ground_truth (world), child
@@ -21,6 +23,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -84,11 +87,37 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  const bool rear = !params.rear_lms200_link.empty();
+  ekf_slam::calibration::LaserMount rear_mount;
+  if (rear) {
+    error = ekf_slam::calibration::loadLaserMount(params.rear_calibration_file, &rear_mount);
+    if (!error.empty()) {
+      ROS_FATAL("simulator: parameter ~rear_calibration_file: %s", error.c_str());
+      return 1;
+    }
+    if (rear_mount.child_frame == mount.child_frame) {
+      ROS_FATAL(
+          "simulator: ~rear_calibration_file %s names the child_frame '%s' of "
+          "~calibration_file %s: the two lasers need frames of their own",
+          params.rear_calibration_file.c_str(), rear_mount.child_frame.c_str(),
+          params.calibration_file.c_str());
+      return 1;
+    }
+  }
+
   serial_io::PseudoTerminal p3dx_pty, lms200_pty;
   if (!openPty(&p3dx_pty, params.p3dx_link, &error) ||
       !openPty(&lms200_pty, params.lms200_link, &error)) {
     ROS_FATAL("simulator: %s", error.c_str());
     return 1;
+  }
+  std::unique_ptr<serial_io::PseudoTerminal> rear_pty;
+  if (rear) {
+    rear_pty = std::make_unique<serial_io::PseudoTerminal>();
+    if (!openPty(rear_pty.get(), params.rear_lms200_link, &error)) {
+      ROS_FATAL("simulator: %s", error.c_str());
+      return 1;
+    }
   }
 
   // The robot. Its odometry starts at zero at the driver's OPEN, as on the
@@ -123,6 +152,25 @@ int main(int argc, char** argv) {
   uint64_t scans = 0;
   laser.setScanObserver([&](const sick_lms200::TrueScan&) { ++scans; });
 
+  // The rear scanner: its own mount, pty and noise stream, the same world
+  // and true pose.
+  std::unique_ptr<sick_lms200::Lms200Emulator> rear_laser;
+  uint64_t rear_scans = 0;
+  if (rear) {
+    sick_lms200::EmulatorOptions rear_options = laser_options;
+    rear_options.seed = static_cast<uint32_t>(params.seed) + 2;
+    const Pose2 rear_in_base = rear_mount.pose();
+    serial_io::PseudoTerminal* pty = rear_pty.get();
+    rear_laser = std::make_unique<sick_lms200::Lms200Emulator>(
+        *pty, world,
+        [&history, rear_in_base](double t) {
+          return ekf_slam::compose(history.at(t), rear_in_base);
+        },
+        rear_options);
+    rear_laser->setPeerBaudSource([pty] { return pty->peerBaud(); });
+    rear_laser->setScanObserver([&](const sick_lms200::TrueScan&) { ++rear_scans; });
+  }
+
   ekf_slam::sim::GroundTruthPublisher::Frames frames;
   frames.truth = params.truth_frame;
   frames.truth_child = params.truth_child_frame;
@@ -136,6 +184,11 @@ int main(int argc, char** argv) {
       params.world_file.c_str(), world.width(), world.height(), start.x, start.y, start.theta,
       params.p3dx_link.c_str(), params.lms200_link.c_str(), mount.x, mount.y, mount.yaw,
       params.calibration_file.c_str());
+  if (rear) {
+    ROS_INFO("simulator: rear LMS200 on %s; laser mount (%.3f, %.3f, %.3f) from %s",
+             params.rear_lms200_link.c_str(), rear_mount.x, rear_mount.y, rear_mount.yaw,
+             params.rear_calibration_file.c_str());
+  }
 
   using Clock = std::chrono::steady_clock;
   const Clock::time_point epoch = Clock::now();
@@ -156,6 +209,7 @@ int main(int argc, char** argv) {
       next_robot_step = std::max(next_robot_step + params.robot_step, now);
     }
     laser.spinOnce(now);
+    if (rear_laser) rear_laser->spinOnce(now);
     if (now >= next_truth) {
       next_truth = std::max(next_truth + truth_period, now);
       if (true_pose_stamp > last_truth_stamp) {  // each pose once (tf refuses repeats)
@@ -166,12 +220,16 @@ int main(int argc, char** argv) {
     }
     // Sleep to the earliest deadline; at most 5 ms so that commands from
     // the drivers are answered promptly (a real device answers within ms).
-    const double wake =
+    double wake =
         std::min({next_robot_step, next_truth, laser.nextDeadline(now), seconds() + 0.005});
+    if (rear_laser) wake = std::min(wake, rear_laser->nextDeadline(now));
     const double sleep = wake - seconds();
     if (sleep > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(sleep));
   }
   // rosconsole is already shut down here (SIGINT): plain stdout.
+  if (rear_laser) {
+    std::printf("simulator: %lu rear scans\n", static_cast<unsigned long>(rear_scans));
+  }
   std::printf("simulator: stopping after %lu scans, %lu P3-DX SIPs, %lu blocked motion steps\n",
               static_cast<unsigned long>(scans),
               static_cast<unsigned long>(robot.stats().sips_sent),

@@ -15,6 +15,11 @@ struct SimulatorParams {
   std::string calibration_file;  // config/calibration.yaml
   std::string p3dx_link = "/tmp/ekf_slam_sim/p3dx";
   std::string lms200_link = "/tmp/ekf_slam_sim/lms200";
+  // A second, rear LMS200 on its own pseudo-terminal: empty for none. Its
+  // mount: rear_calibration_file (required with it), e.g.
+  // config/calibration_rear.yaml.
+  std::string rear_lms200_link;
+  std::string rear_calibration_file;
   double robot_radius = 0.26;     // m, P3-DX body: 455 mm x 381 mm (plus wheels)
   double wheel_noise = 0.03;      // std of each wheel's distance error per robot_step, fraction
   double range_noise = 0.01;      // m, 1-sigma of each laser range

@@ -57,7 +57,14 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   services_.push_back(private_node_.advertiseService("save_map", &SlamNode::onSaveMap, this));
   services_.push_back(private_node_.advertiseService("load_map", &SlamNode::onLoadMap, this));
 
-  if (config_.laser_pose_given) laser_pose_ = config_.pipeline.filter.laser_pose;
+  if (!params_.rear_scan_topic.empty()) {
+    // The pipeline maps merged scans from a virtual laser at base_link; a
+    // laser pose in the configuration is then the front laser's mount.
+    if (config_.laser_pose_given) front_mount_ = config_.pipeline.filter.laser_pose;
+    laser_pose_ = Pose2();
+  } else if (config_.laser_pose_given) {
+    laser_pose_ = config_.pipeline.filter.laser_pose;
+  }
   if (!params_.initial_map.empty()) {
     LandmarkMapFile map;
     const std::string error = readLandmarkMap(params_.initial_map, &map);
@@ -95,6 +102,12 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
           onTransformsFailed(m.get(), reason);
         });
     input_subscriber_ = node_.subscribe(params_.scan_topic, 50, &SlamNode::onScan, this);
+    if (!params_.rear_scan_topic.empty()) {
+      rear_subscriber_ = node_.subscribe(params_.rear_scan_topic, 50, &SlamNode::onRearScan, this);
+      ROS_INFO("ekf_slam_node: merging %s with the rear laser's %s (tolerance %.3f s)",
+               input_subscriber_.getTopic().c_str(), rear_subscriber_.getTopic().c_str(),
+               params_.rear_scan_tolerance);
+    }
   }
   initial_pose_subscriber_ = node_.subscribe("initialpose", 2, &SlamNode::onInitialPose, this);
   tf_timer_ =
@@ -153,7 +166,10 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
     laser_frame_ = pending.header.frame_id;
     ROS_INFO("ekf_slam_node: started; laser pose %s -> %s: %.3f m, %.3f m, %.2f deg%s",
              params_.base_frame.c_str(), laser_frame_.c_str(), laser_pose_->x, laser_pose_->y,
-             radToDeg(laser_pose_->theta), config_.laser_pose_given ? " (configuration)" : " (tf)");
+             radToDeg(laser_pose_->theta),
+             !params_.rear_scan_topic.empty()
+                 ? " (the merged front and rear scans' virtual laser)"
+                 : (config_.laser_pose_given ? " (configuration)" : " (tf)"));
   } else if (!config_.laser_pose_given) {
     const Pose2 d = between(*laser_pose_, laser);
     if (std::hypot(d.x, d.y) > params_.laser_pose_tolerance ||

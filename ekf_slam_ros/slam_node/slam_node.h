@@ -17,6 +17,10 @@
 // output, stamped and framed as the scan) instead: checks (known kinds,
 // finite values, positive-definite covariances, stamp order) → the same
 // queue → SlamPipeline::processFeatures → the same outputs.
+// With a rear laser (~rear_scan_topic) each scan, once released, is merged
+// with the rear scan nearest in time (slam_node_rear.cc): both mounts from
+// tf, the robot's motion between the two stamps from odom → base_link; the
+// pipeline then maps the merged 360° scan from a laser at base_link.
 // Nothing is written back into the robot (thesis §3.4.2): the map frame
 // is a separate estimate published as map → odom (REP-105).
 // Every output is stamped with the scan's stamp (data time), so bag replay
@@ -54,6 +58,7 @@
 #include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
+#include "ekf_slam_core/sensors/scan_merge.h"
 #include "ekf_slam_ros/offline/slam_config.h"
 #include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
 #include "ekf_slam_ros/slam_node/live_map.h"
@@ -133,6 +138,16 @@ class SlamNode {
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
               Pose2* pose, std::string* why, bool* behind = nullptr) const;
   void drop(DropReason reason, const std::string& detail);
+
+  // --- rear laser (slam_node_rear.cc): ~rear_scan_topic merged into each scan.
+  void onRearScan(const sensor_msgs::LaserScan::ConstPtr& message);
+  // Processes `pending` (a released scan; `odometry` odom → base_link and
+  // `front_mount` base_link → its frame at its stamp) merged with the rear
+  // scan nearest in time, or alone (counted) when there is none within
+  // rear_scan_tolerance or its transforms are missing. Either way the
+  // pipeline gets a 360° scan about base_link and the identity laser pose.
+  void processWithRear(const PendingInput& pending, const Pose2& odometry,
+                       const Pose2& front_mount);
 
   // --- processing (slam_node.cc): the pipeline and one input through it.
   void createPipeline(const Pose2& laser_pose);
@@ -257,6 +272,22 @@ class SlamNode {
   std::deque<double> nis_window_;  // the last nis_window NIS values
   long drops_at_last_diagnostic_ = 0;
   long laser_pose_changes_ = 0;
+
+  // Rear laser (empty rear_scan_topic: none of this is used).
+  struct RearScan {
+    Scan scan;
+    ros::Time stamp;
+    std::string frame_id;
+  };
+  ros::Subscriber rear_subscriber_;
+  std::deque<RearScan> rear_scans_;   // newest last, stamps increasing
+  std::optional<Pose2> front_mount_;  // filter.laser_pose of the configuration (else tf)
+  long rear_received_ = 0;            // rear messages received
+  long rear_refused_ = 0;             // … refused: bad geometry, no frame, stamp
+  long merged_scans_ = 0;             // scans processed with a rear scan merged in
+  long alone_no_rear_ = 0;            // … alone: no rear scan within rear_scan_tolerance
+  long alone_no_transform_ = 0;       // … alone: the rear scan's transforms missing
+  long alone_at_last_diagnostic_ = 0;
 };
 
 }  // namespace ekf_slam

@@ -55,6 +55,20 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("wide-window matches never confirmed", loops.unconfirmed);
     status.add("filter re-anchored", counters.reanchors);
   }
+  if (config_.pipeline.landmarks == LandmarkSet::kPointsAndMecp) {
+    status.add("MECP updates", counters.mecp_updates);
+    status.add("MECP: no polygon around the robot", counters.mecp_without_polygon);
+    status.add("MECP: skipped (centre too near, or refused)", counters.mecp_skipped);
+  }
+  const bool rear = !params_.rear_scan_topic.empty();
+  const long alone = alone_no_rear_ + alone_no_transform_;
+  if (rear) {
+    status.add("rear scans received", rear_received_);
+    status.add("rear scans refused", rear_refused_);
+    status.add("scans merged with a rear scan", merged_scans_);
+    status.add("scans without the rear laser: none within rear_scan_tolerance", alone_no_rear_);
+    status.add("scans without the rear laser: rear transforms missing", alone_no_transform_);
+  }
   if (live_map_) {
     status.add("maps published", live_map_->published());
     status.add("last map build [s]", live_map_->lastBuildSeconds());
@@ -66,6 +80,10 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    std::to_string(drops - drops_at_last_diagnostic_) +
                        " inputs rejected since the last report (see counters)");
+  } else if (rear && alone > alone_at_last_diagnostic_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   std::to_string(alone - alone_at_last_diagnostic_) +
+                       " scans used without the rear laser since the last report (see counters)");
   } else if (!nis_inside) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "average NIS outside its 95% band (filter inconsistent)");
@@ -75,6 +93,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
   }
   drops_at_last_diagnostic_ = drops;
+  alone_at_last_diagnostic_ = alone;
 
   status.add("paused", paused_);
   status.add("steps (~step)", steps_done_);

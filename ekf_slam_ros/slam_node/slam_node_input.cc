@@ -257,6 +257,10 @@ void SlamNode::processReleased(const PendingInput& pending) {
     drop(DropReason::kLaserTransformMissing, detail.str());
     return;
   }
+  if (!params_.rear_scan_topic.empty() && pending.scan) {
+    processWithRear(pending, odometry, laser);
+    return;
+  }
   process(pending, odometry, laser);
 }
 

@@ -3,6 +3,7 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
+#include "ekf_slam_core/geometry/angle.h"
 #include "ros_params/private_params.h"
 
 namespace ekf_slam {
@@ -89,6 +90,24 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
   read.integer("path_max_poses", &p->path_max_poses, 0, 100000000);
   read.number("map_update_interval", &p->map_update_interval, 0.0, 3600.0);
   read.number("max_future_stamp", &p->max_future_stamp, 0.0, 1e6);
+  read.text("rear_scan_topic", &p->rear_scan_topic, /*required=*/false);
+  read.number("rear_scan_tolerance", &p->rear_scan_tolerance, 0.0, 10.0);
+  read.number("merged_angle_increment", &p->merged_angle_increment, 0.0, kPi / 4.0);
+  if (p->merged_angle_increment > 0.0 && p->merged_angle_increment < 1e-4) {
+    read.fail("merged_angle_increment",
+              "must be 0 (the scan's own increment) or in [0.0001, pi/4] rad, got " +
+                  std::to_string(p->merged_angle_increment));
+  }
+  if (!p->rear_scan_topic.empty()) {
+    if (p->input != "scan") {
+      read.fail("rear_scan_topic",
+                "needs input 'scan' (the rear scan is merged into the raw scans), not '" +
+                    p->input + "'");
+    }
+    if (p->rear_scan_topic == p->scan_topic) {
+      read.fail("rear_scan_topic", "must differ from scan_topic (" + p->scan_topic + ")");
+    }
+  }
   if (p->map_frame == p->odom_frame) read.fail("map_frame", "must differ from odom_frame");
   if (p->odom_frame == p->base_frame) read.fail("base_frame", "must differ from odom_frame");
   read.rejectUnknown();

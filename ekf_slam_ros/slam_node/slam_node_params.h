@@ -46,6 +46,14 @@ struct SlamNodeParams {
   // s: a scan stamped further ahead of the clock (ros::Time::now(), sim
   // time included) is refused and counted, and never becomes the reference.
   double max_future_stamp = 1.0;
+  // A second, rear laser (sensor_msgs/LaserScan): each scan is merged with
+  // the rear scan nearest in time into one 360° scan about base_link
+  // (ekf_slam_core/sensors/scan_merge.h). Empty: the scan alone. Needs
+  // input "scan".
+  std::string rear_scan_topic;
+  double rear_scan_tolerance = 0.2;  // s: a rear scan further from the scan's stamp is not used
+  // rad, bearing step of the merged scan; 0: the scan's own increment.
+  double merged_angle_increment = 0.0;
 };
 
 // False with `error` naming the key (resolved name) on a bad or unknown key.

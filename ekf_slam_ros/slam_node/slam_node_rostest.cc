@@ -6,6 +6,9 @@
 //     base_link → laser is missing: the node keeps running, /diagnostics
 //     counts each case, the log names the frames, the map is unchanged.
 //   Services.*: pause / resume, save_map / reset / load_map, smooth.
+//   RearLaser.*: a second laser behind the robot (scan_rear, laser_rear)
+//     merged into the scans; bad, stale and unplaceable rear scans leave
+//     the front scans mapped alone, counted and logged.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ekf_slam/AssociationReport.h>
 #include <ekf_slam/Features.h>
@@ -53,6 +56,7 @@ class Robot {
     room_.addBox(Vector2(-2.5, -1.0), 0.5, 0.5);
     room_.addBox(Vector2(0.5, -2.2), 0.8, 0.3);
     scans_ = node_.advertise<sensor_msgs::LaserScan>("scan", 10);
+    rear_scans_ = node_.advertise<sensor_msgs::LaserScan>("scan_rear", 10);
   }
   ~Robot() { stop(); }
 
@@ -67,12 +71,25 @@ class Robot {
 
   std::atomic<bool> publish_scans{true};     // good scans
   std::atomic<bool> publish_laser_tf{true};  // base_link → laser
+  std::atomic<bool> publish_rear_tf{false};  // base_link → laser_rear
+  // Good rear scans, stamped kRearLag before each front scan (the two
+  // lasers are not synchronised).
+  std::atomic<bool> publish_rear_scans{false};
+  static constexpr double kRearLag = 0.05;  // s
 
   // Publishes one scan now with `stamp` and ranges transformed by `edit`.
   void publishScan(const ros::Time& stamp, const std::function<void(std::vector<float>*)>& edit) {
     sensor_msgs::LaserScan scan = makeScan(stamp);
     edit(&scan.ranges);
     scans_.publish(scan);
+  }
+  // Publishes one rear scan now with `stamp`, `frame` and ranges
+  // transformed by `edit` (seen from the rear mount).
+  void publishRearScan(const ros::Time& stamp, const std::string& frame,
+                       const std::function<void(std::vector<float>*)>& edit) {
+    sensor_msgs::LaserScan scan = makeScan(stamp, rear_in_base_, frame);
+    edit(&scan.ranges);
+    rear_scans_.publish(scan);
   }
   // Publishes one odom → base_link stamped `stamp` (the trajectory's pose then).
   void publishOdometry(const ros::Time& stamp) {
@@ -97,9 +114,13 @@ class Robot {
   }
 
   sensor_msgs::LaserScan makeScan(const ros::Time& stamp) {
+    return makeScan(stamp, laser_in_base_, "laser");
+  }
+  sensor_msgs::LaserScan makeScan(const ros::Time& stamp, const Pose2& mount,
+                                  const std::string& frame) {
     sim::SweepGeometry sweep;  // 181 beams over 180°, 8 m
     const double t = (stamp - start_).toSec();
-    const Pose2 laser = compose(poseAt(t), laser_in_base_);
+    const Pose2 laser = compose(poseAt(t), mount);
     std::vector<double> ranges;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -107,7 +128,7 @@ class Robot {
     }
     sensor_msgs::LaserScan scan;
     scan.header.stamp = stamp;
-    scan.header.frame_id = "laser";
+    scan.header.frame_id = frame;
     scan.angle_min = sweep.angle_min;
     scan.angle_increment = sweep.angle_increment;
     scan.angle_max = sweep.angle_min + (sweep.count - 1) * sweep.angle_increment;
@@ -140,6 +161,12 @@ class Robot {
       const ros::Time now = ros::Time::now();
       tf_.sendTransform(transform(now, "odom", "base_link", poseAt((now - start_).toSec())));
       if (publish_laser_tf) tf_.sendTransform(transform(now, "base_link", "laser", laser_in_base_));
+      if (publish_rear_tf) {
+        tf_.sendTransform(transform(now, "base_link", "laser_rear", rear_in_base_));
+      }
+      if (publish_rear_scans) {
+        rear_scans_.publish(makeScan(now - ros::Duration(kRearLag), rear_in_base_, "laser_rear"));
+      }
       if (publish_scans) {
         scans_.publish(makeScan(now));
         std::lock_guard<std::mutex> lock(mutex_);
@@ -151,10 +178,11 @@ class Robot {
   }
 
   ros::NodeHandle node_;
-  ros::Publisher scans_;
+  ros::Publisher scans_, rear_scans_;
   tf2_ros::TransformBroadcaster tf_;
   sim::PolygonWorld room_;
-  const Pose2 laser_in_base_{0.16, 0.0, 0.0};  // LMS200 on a P3-DX: 16 cm ahead
+  const Pose2 laser_in_base_{0.16, 0.0, 0.0};   // LMS200 on a P3-DX: 16 cm ahead
+  const Pose2 rear_in_base_{-0.251, 0.0, kPi};  // config/calibration_rear.yaml: facing backwards
   std::mt19937 rng_{42};
   std::mutex mutex_;
   ros::Time start_, last_good_stamp_;
@@ -472,6 +500,93 @@ TEST_F(SlamNodeTest, OutputsCarryTheScansStampsAndFrames) {
     EXPECT_LT(o.candidates[0].mahalanobis_sq, o.gate);
   }
   EXPECT_GT(matched, 0) << "a corner seen again is matched";
+}
+
+// slam.launch rear_scan:=scan_rear (test/slam_node_rear_input.test).
+TEST_F(SlamNodeTest, RearLaserIsMergedAndBadRearInputLeavesTheScansAlone) {
+  // Good rear scans: merged, and the filter sees behind the robot.
+  robot_.publish_rear_tf = true;
+  robot_.publish_rear_scans = true;
+  ASSERT_TRUE(
+      waitFor([&] { return observer_.diagnostic("scans merged with a rear scan") > 20; }, 10.0))
+      << "no scans merged: " << observer_.diagnosticText("scans merged with a rear scan");
+  auto behind = [&] {
+    const ekf_slam::AssociationReport report = observer_.association();
+    if (report.header.frame_id != "base_link") return false;
+    for (const auto& o : report.observations) {
+      if (std::abs(o.bearing) > degToRad(100.0)) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(waitFor(behind, 10.0))
+      << "no observation behind the robot in the association reports (frame '"
+      << observer_.association().header.frame_id << "')";
+  EXPECT_EQ(observer_.diagnostic("rear scans refused"), 0.0);
+
+  // Bad rear input; the front scans go on.
+  robot_.publish_rear_scans = false;
+  ros::WallDuration(0.6).sleep();
+  ASSERT_TRUE(freshDiagnostics());
+  const double refused_before = observer_.diagnostic("rear scans refused");
+  const double stale_before =
+      observer_.diagnostic("scans without the rear laser: none within rear_scan_tolerance");
+  const double unplaced_before =
+      observer_.diagnostic("scans without the rear laser: rear transforms missing");
+  const double merged_before = observer_.diagnostic("scans merged with a rear scan");
+  const double iterations_before = observer_.diagnostic("iterations");
+  ASSERT_FALSE(std::isnan(stale_before));
+  // 1. A rear scan ten readings short of its angle fields, and one stamped
+  // 10⁶ s ahead: refused on arrival.
+  robot_.publishRearScan(ros::Time::now(), "laser_rear",
+                         [](std::vector<float>* r) { r->resize(r->size() - 10); });
+  robot_.publishRearScan(ros::Time::now() + ros::Duration(1.0e6), "laser_rear",
+                         [](std::vector<float>*) {});
+  // 2. Rear scans 0.5 s older than the scans (beyond rear_scan_tolerance,
+  // 0.2 s): the scans are mapped alone.
+  for (int i = 0; i < 10; ++i) {
+    robot_.publishRearScan(ros::Time::now() - ros::Duration(0.5), "laser_rear",
+                           [](std::vector<float>*) {});
+    ros::WallDuration(0.1).sleep();
+  }
+  ros::WallDuration(0.6).sleep();
+  // 3. Rear scans in a frame tf does not know: mapped alone.
+  for (int i = 0; i < 10; ++i) {
+    robot_.publishRearScan(ros::Time::now(), "laser_nowhere", [](std::vector<float>*) {});
+    ros::WallDuration(0.1).sleep();
+  }
+  // 4. Rear scans full of NaN and +inf: merged, adding nothing.
+  for (int i = 0; i < 5; ++i) {
+    robot_.publishRearScan(ros::Time::now(), "laser_rear", [i](std::vector<float>* r) {
+      std::fill(
+          r->begin(), r->end(),
+          i % 2 ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity());
+    });
+    ros::WallDuration(0.1).sleep();
+  }
+  ros::WallDuration(0.5).sleep();
+
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_GE(observer_.diagnostic("rear scans refused"), refused_before + 2);
+  EXPECT_GE(observer_.diagnostic("scans without the rear laser: none within rear_scan_tolerance"),
+            stale_before + 3);
+  EXPECT_GE(observer_.diagnostic("scans without the rear laser: rear transforms missing"),
+            unplaced_before + 3);
+  EXPECT_GE(observer_.diagnostic("scans merged with a rear scan"), merged_before + 1);
+  EXPECT_GT(observer_.diagnostic("iterations"), iterations_before + 10)
+      << "the scans must be mapped alone meanwhile";
+  EXPECT_TRUE(observer_.logged("rear scan", "refused"));
+  EXPECT_TRUE(observer_.logged("used without the rear laser", "rear_scan_tolerance"));
+  EXPECT_TRUE(observer_.logged("used without the rear laser", "laser_nowhere"))
+      << "the log must name the frame whose transform is missing";
+
+  // Merged again once the rear laser is back.
+  const double merged_after = observer_.diagnostic("scans merged with a rear scan");
+  robot_.publish_rear_scans = true;
+  EXPECT_TRUE(waitFor(
+      [&] { return observer_.diagnostic("scans merged with a rear scan") > merged_after + 5; },
+      5.0));
+  const ros::Time resumed = ros::Time::now();
+  EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
 }
 
 TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
