@@ -45,6 +45,9 @@ class BadParameters(unittest.TestCase):
     def test_unknown_key_names_the_key(self):
         self.check("ekf_slam_node", "tf_timout", "_tf_timout:=0.5")
 
+    def test_negative_history_bound_names_the_key(self):
+        self.check("ekf_slam_node", "history_max_scans", "_history_max_scans:=-1")
+
     def test_wrong_type_names_the_key(self):
         self.check("ekf_slam_node", "scan_queue_size", "_scan_queue_size:=many")
 

@@ -26,8 +26,11 @@ int BackEndView::keyAtOrBefore(int scan_index) const {
 }
 
 LoopClosureBackEnd::LoopClosureBackEnd(const LoopClosureOptions& options,
-                                       const ScanMatcherOptions& matcher, bool own_thread)
-    : delay_(options.correction_delay), own_thread_(own_thread), closer_(options, matcher) {
+                                       const ScanMatcherOptions& matcher, bool own_thread,
+                                       long scan_history)
+    : delay_(options.correction_delay),
+      own_thread_(own_thread),
+      closer_(options, matcher, scan_history) {
   views_.push_back(std::make_shared<const BackEndView>());
   key_count_ = 0;
   optimisations_ = 0;

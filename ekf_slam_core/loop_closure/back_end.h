@@ -49,9 +49,10 @@ struct BackEndView {
 
 class LoopClosureBackEnd {
  public:
-  // `own_thread`: run the LoopCloser on a thread of its own.
+  // `own_thread`: run the LoopCloser on a thread of its own;
+  // `scan_history`: the LoopCloser's bound on its per-scan entries.
   LoopClosureBackEnd(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
-                     bool own_thread);
+                     bool own_thread, long scan_history = 0);
   ~LoopClosureBackEnd();
   LoopClosureBackEnd(const LoopClosureBackEnd&) = delete;
   LoopClosureBackEnd& operator=(const LoopClosureBackEnd&) = delete;

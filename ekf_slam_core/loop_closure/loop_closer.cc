@@ -3,6 +3,7 @@
 #include "ekf_slam_core/filter/chi_square.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -82,8 +83,9 @@ Matrix3 icpCovariance(const std::vector<Vector2>& points, const PointCloudRefere
 
 }  // namespace
 
-LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher)
-    : options_(options), icp_(matcher) {
+LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
+                       long scan_history)
+    : options_(options), icp_(matcher), scan_history_(std::max(0L, scan_history)) {
   icp_.max_range = options.max_range;
   // The loop's pose comes from the correlative search, not from odometry:
   // the ICP prior only regularises, it must not pull.
@@ -96,25 +98,35 @@ LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptio
 void LoopCloser::addScan(double stamp, const Scan& scan, const Pose2& laser_pose,
                          const Pose2& front_end, bool usable) {
   if (keys_.empty() && usable) {
-    addKeyScan(scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
+    addKeyScan(stamp, scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
   } else if (usable) {
     const Pose2 since = between(keys_.back().front_end, front_end);
     if (std::hypot(since.x, since.y) >= options_.keyscan_distance ||
         std::abs(since.theta) >= options_.keyscan_angle) {
-      addKeyScan(scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
+      addKeyScan(stamp, scanPointsInRobotFrame(scan, laser_pose, icp_), front_end);
     }
   }
   ScanEntry entry{stamp, static_cast<int>(keys_.size()) - 1, front_end};
   if (entry.key >= 0) entry.offset = between(keys_[entry.key].front_end, front_end);
   scans_.push_back(entry);
+  // The per-scan entries serve scanPoses() alone: with a history bound the
+  // oldest go, an eighth of the bound at a time (one erase per many scans).
+  const long slack = std::max(1L, scan_history_ / 8);
+  if (scan_history_ > 0 && static_cast<long>(scans_.size()) >= scan_history_ + slack) {
+    const long drop = static_cast<long>(scans_.size()) - scan_history_;
+    scans_.erase(scans_.begin(), scans_.begin() + drop);
+    first_scan_ += static_cast<int>(drop);
+  }
 }
 
-void LoopCloser::addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end) {
+void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
+                            const Pose2& front_end) {
   KeyScan key;
   key.front_end = front_end;
   key.points = std::make_shared<const std::vector<Vector2>>(points);
   key.sparse = thinned(points, options_.search_point_spacing);
-  key.scan_index = static_cast<int>(scans_.size());  // its ScanEntry is pushed next
+  key.scan_index = scanCount();  // its ScanEntry is pushed next
+  key.stamp = stamp;
   ++counters_.key_scans;
   adjacency_.emplace_back();
   if (keys_.empty()) {

@@ -175,7 +175,12 @@ struct LoopClosureCounters {
 class LoopCloser {
  public:
   // `matcher` gives the ICP settings (normals, gates, point noise) of the front end.
-  LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher);
+  // `scan_history` > 0 bounds the per-scan entries kept for scanPoses() to
+  // at least that many of the newest (trimmed in steps of an eighth of it,
+  // so at most 9/8 of it); 0 keeps every scan. The loop search works on key
+  // scans only, so the bound never changes the graph.
+  LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
+             long scan_history = 0);
 
   // Every scan, in order, with its front-end pose (odom frame). A scan
   // without usable geometry (usable = false) never becomes a key scan.
@@ -194,7 +199,8 @@ class LoopCloser {
   // Final optimisation: drops the loops the kernel rejects, re-optimises.
   void finish();
 
-  // One pose per scan given to addScan, in the map frame of the first key scan.
+  // One pose per scan given to addScan and still kept (scans firstScan() to
+  // scanCount() − 1), in the map frame of the first key scan.
   std::vector<StampedPose> scanPoses() const;
   // The pose of the latest scan given to addScan, from the graph as it
   // stands now (after any optimisation that scan triggered): the causal,
@@ -206,12 +212,15 @@ class LoopCloser {
   // The graph as the last optimisation of finish() found it (the problem
   // that optimisation solved); empty when finish() did not optimise.
   const PoseGraph& finalProblem() const { return final_problem_; }
-  // Scan `scan` (addScan order) hangs off key scan scanKey(scan) (−1 before
-  // the first) at scanOffset(scan): scanPoses() composes the two.
-  int scanCount() const { return static_cast<int>(scans_.size()); }
-  int scanKey(int scan) const { return scans_[scan].key; }
-  const Pose2& scanOffset(int scan) const { return scans_[scan].offset; }
-  double scanStamp(int scan) const { return scans_[scan].stamp; }
+  // Scan `scan` (addScan order, counted from the first scan ever given)
+  // hangs off key scan scanKey(scan) (−1 before the first) at
+  // scanOffset(scan): scanPoses() composes the two. Scans before
+  // firstScan() were let go (scan_history); scanCount() counts them too.
+  int scanCount() const { return first_scan_ + static_cast<int>(scans_.size()); }
+  int firstScan() const { return first_scan_; }
+  int scanKey(int scan) const { return scans_[scan - first_scan_].key; }
+  const Pose2& scanOffset(int scan) const { return scans_[scan - first_scan_].offset; }
+  double scanStamp(int scan) const { return scans_[scan - first_scan_].stamp; }
   // Graph node `key` was taken at this scan (index in addScan order). Loop
   // edges are the graph's robust edges; the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
@@ -223,7 +232,7 @@ class LoopCloser {
     return keys_[key].points;
   }
   Pose2 keyFrontEnd(int key) const { return keys_[key].front_end; }
-  double keyStamp(int key) const { return scans_[keys_[key].scan_index].stamp; }
+  double keyStamp(int key) const { return keys_[key].stamp; }
 
  private:
   struct KeyScan {
@@ -233,6 +242,7 @@ class LoopCloser {
     double travel_from_previous = 0.0;                   // m
     int retry_after = 0;  // key index before which it is not tried again
     int scan_index = -1;  // index of its scan in addScan order
+    double stamp = 0.0;   // of its scan
   };
   struct ScanEntry {
     double stamp;
@@ -240,7 +250,7 @@ class LoopCloser {
     Pose2 offset;  // front-end increment from that key scan
   };
 
-  void addKeyScan(const std::vector<Vector2>& points, const Pose2& front_end);
+  void addKeyScan(double stamp, const std::vector<Vector2>& points, const Pose2& front_end);
   // False when the consistency test refused it (the graph is then as before).
   bool addLoopEdge(int from, int to, const Pose2& relative);
   std::vector<double> graphDistances(int from) const;
@@ -264,7 +274,9 @@ class LoopCloser {
   PoseGraph graph_;
   PoseGraph final_problem_;  // see finalProblem()
   std::vector<KeyScan> keys_;
-  std::vector<ScanEntry> scans_;
+  std::vector<ScanEntry> scans_;  // scans first_scan_ on
+  int first_scan_ = 0;
+  long scan_history_ = 0;                                       // see the constructor
   std::vector<std::vector<std::pair<int, double>>> adjacency_;  // graph distance edges
   LoopClosureCounters counters_;
   int next_attempt_ = 0;  // key index before which no loop is tried (after a refusal)

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "ekf_slam_core/sim/polygon_world.h"
@@ -175,6 +176,55 @@ LoopRun runTwoLaps(bool enabled, int false_loops = 0) {
 }
 
 double positionError(const Pose2& a, const Pose2& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+bool samePose(const Pose2& a, const Pose2& b) {
+  return a.x == b.x && a.y == b.y && a.theta == b.theta;
+}
+
+// A bound on the per-scan entries (scan_history) leaves the loop search
+// alone: the same scans give the same graph, loops and causal poses, and
+// scanPoses() is the newest part of the unbounded closer's, while the
+// entries stay at the bound.
+TEST(LoopCloser, AScanHistoryBoundKeepsTheGraphAndTheNewestScanPoses) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(11);
+  const std::vector<Pose2> truth = twoLaps();
+  const long history = 50;
+  LoopCloser full{LoopClosureOptions(), ScanMatcherOptions()};
+  LoopCloser bounded(LoopClosureOptions(), ScanMatcherOptions(), history);
+  Pose2 front_end = truth.front();
+  int most_entries = 0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (i > 0) {
+      const Pose2 step = between(truth[i - 1], truth[i]);
+      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
+    }
+    const Scan scan = sweep(world, truth[i], &rng);
+    full.addScan(0.1 * i, scan, Pose2(), front_end, true);
+    bounded.addScan(0.1 * i, scan, Pose2(), front_end, true);
+    ASSERT_TRUE(samePose(full.latestPose(), bounded.latestPose())) << "scan " << i;
+    most_entries = std::max(most_entries, bounded.scanCount() - bounded.firstScan());
+  }
+  EXPECT_GT(full.counters().accepted, 3);
+  EXPECT_EQ(bounded.counters().accepted, full.counters().accepted);
+  EXPECT_LE(most_entries, history + history / 8);
+  EXPECT_EQ(bounded.scanCount(), full.scanCount());
+  EXPECT_GT(bounded.firstScan(), 0);
+  ASSERT_EQ(bounded.keyCount(), full.keyCount());
+  for (int k = 0; k < full.keyCount(); ++k) {
+    EXPECT_TRUE(samePose(bounded.graph().pose(k), full.graph().pose(k))) << "key " << k;
+    EXPECT_EQ(bounded.keyStamp(k), full.keyStamp(k)) << "key " << k;
+    EXPECT_EQ(bounded.keyScanIndex(k), full.keyScanIndex(k)) << "key " << k;
+  }
+  const std::vector<StampedPose> all = full.scanPoses(), newest = bounded.scanPoses();
+  ASSERT_EQ(static_cast<int>(newest.size()), bounded.scanCount() - bounded.firstScan());
+  for (size_t i = 0; i < newest.size(); ++i) {
+    const StampedPose& same = all[bounded.firstScan() + i];
+    EXPECT_EQ(newest[i].stamp, same.stamp);
+    EXPECT_TRUE(samePose(newest[i].pose, same.pose)) << "scan " << bounded.firstScan() + i;
+    EXPECT_EQ(bounded.scanKey(bounded.firstScan() + i), full.scanKey(bounded.firstScan() + i));
+  }
+}
 
 TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {
   const LoopRun run = runTwoLaps(/*enabled=*/true);

@@ -1,5 +1,6 @@
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <sstream>
@@ -61,6 +62,7 @@ std::string PipelineOptions::validate() const {
       landmarks != LandmarkSet::kPointsAndLineAngles) {
     return "rooms.enabled needs walls: landmarks points+lines or points+lines_theta";
   }
+  if (history_scans < 0) return "history_scans must be >= 0 (0: every scan)";
   return "";
 }
 
@@ -109,9 +111,14 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
                         ? std::make_unique<ScanMatchingOdometry>(options.scan_matching,
                                                                  options.filter.motion_noise)
                         : nullptr),
+      // The loop closer keeps its per-scan entries for at least the
+      // pipeline's longest history (history_scans plus the trimming step).
       back_end_(options.loop_closure.enabled
                     ? std::make_unique<LoopClosureBackEnd>(
-                          options.loop_closure, options.scan_matching, options.back_end_thread)
+                          options.loop_closure, options.scan_matching, options.back_end_thread,
+                          options.history_scans > 0
+                              ? options.history_scans + std::max(1L, options.history_scans / 8)
+                              : 0)
                     : nullptr),
       lines_(lineLandmarksFor(options)),
       filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance) {
@@ -159,8 +166,8 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   auto record = [&]() {
     Pose2 causal = out.pose;
     if (back_end_ && scan != nullptr) {
-      const int loop_scan = static_cast<int>(record_of_loop_scan_.size());
-      record_of_loop_scan_.push_back(static_cast<int>(records_.size()));
+      const int loop_scan = first_loop_scan_ + static_cast<int>(record_of_loop_scan_.size());
+      record_of_loop_scan_.push_back(static_cast<int>(recordedScans()));
       pending_filtered_.push_back(out.pose);
       for (int id : out.iteration.new_landmark_ids) landmark_scan_[id] = loop_scan;
       for (int id : out.lines.new_landmark_ids) landmark_scan_[id] = loop_scan;
@@ -187,11 +194,12 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     r.filtered = out.pose;
     r.covariance = out.pose_covariance;
     r.odometry = odometry;
-    r.iteration = static_cast<int>(recorder_.steps().size()) - 1;
+    r.iteration = first_iteration_ + static_cast<int>(recorder_.steps().size()) - 1;
     r.odometry_at_iteration = last_odometry_;
     r.causal = causal;
     out.causal_pose = causal;
     records_.push_back(r);
+    trimHistory();
   };
 
   std::string input_error;
@@ -469,6 +477,42 @@ int SlamPipeline::boundLandmarks() {
   return filter_.removeLandmarks(ids);
 }
 
+// The history beyond history_scans goes an eighth of the bound at a time
+// (one erase per many scans instead of one per scan). Nothing here feeds
+// the causal estimate: the filter, the front end and the back end's view
+// are untouched, and landmark_scan_ loses only landmarks the filter no
+// longer holds (ids are never reused).
+void SlamPipeline::trimHistory() {
+  const long keep = options_.history_scans;
+  if (keep <= 0) return;
+  const long slack = std::max(1L, keep / 8);
+  if (static_cast<long>(records_.size()) < keep + slack) return;
+  const long drop = static_cast<long>(records_.size()) - keep;
+  records_.erase(records_.begin(), records_.begin() + drop);
+  first_record_ += drop;
+  size_t loop_scans = 0;
+  while (loop_scans < record_of_loop_scan_.size() &&
+         record_of_loop_scan_[loop_scans] < first_record_) {
+    ++loop_scans;
+  }
+  record_of_loop_scan_.erase(record_of_loop_scan_.begin(),
+                             record_of_loop_scan_.begin() + loop_scans);
+  first_loop_scan_ += static_cast<int>(loop_scans);
+  // The iterations before the one the oldest kept scan hangs off; the first
+  // kept one becomes the smoother's start, with the filter's estimate there.
+  const int gone = records_.front().iteration - first_iteration_;
+  if (gone > 0 && gone < static_cast<int>(recorder_.steps().size())) {
+    const SmootherStep& start = recorder_.steps()[gone];
+    full_recorder_.setPrior(start.filtered, start.filtered_cov);
+    recorder_.dropFront(gone);
+    full_recorder_.dropFront(gone);
+    first_iteration_ += gone;
+  }
+  for (auto it = landmark_scan_.begin(); it != landmark_scan_.end();) {
+    it = filter_.slotOf(it->first) < 0 ? landmark_scan_.erase(it) : std::next(it);
+  }
+}
+
 void SlamPipeline::updateMecp(const ScanResult& result) {
   // Per point observation, the landmark it was matched to or made into,
   // following this scan's merges.
@@ -591,12 +635,13 @@ std::vector<StampedPose> SlamPipeline::scanPosesFrom(
   std::vector<StampedPose> out;
   out.reserve(records_.size());
   for (const ScanRecord& r : records_) {
-    if (r.iteration < 0 || r.iteration >= static_cast<int>(iteration_poses.size())) {
+    const int k = r.iteration - first_iteration_;
+    if (r.iteration < 0 || k < 0 || k >= static_cast<int>(iteration_poses.size())) {
       out.push_back({r.stamp, r.filtered});
       continue;
     }
-    out.push_back({r.stamp, compose(iteration_poses[r.iteration],
-                                    between(r.odometry_at_iteration, r.odometry))});
+    out.push_back(
+        {r.stamp, compose(iteration_poses[k], between(r.odometry_at_iteration, r.odometry))});
   }
   return out;
 }
@@ -610,26 +655,30 @@ std::vector<StampedPose> SlamPipeline::rtsScanPoses() const {
 // The back end's loop edges join key scans; a key scan's pose is its
 // iteration's pose composed with the odometry since that iteration, so each
 // loop becomes a constraint between two iteration poses with those offsets.
+// A loop with an end before the kept history (history_scans) is left out.
 std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
   std::vector<IterationConstraint> out;
   if (!back_end_) return out;
   const LoopCloser& closer = back_end_->drained();
   const PoseGraph& graph = closer.graph();
+  // The kept record of loop scan `scan`, or null.
+  auto recordOf = [this](int scan) -> const ScanRecord* {
+    const int i = scan - first_loop_scan_;
+    if (scan < 0 || i < 0 || i >= static_cast<int>(record_of_loop_scan_.size())) return nullptr;
+    const long r = record_of_loop_scan_[i] - first_record_;
+    return r >= 0 ? &records_[r] : nullptr;
+  };
   for (const PoseGraphEdge& edge : graph.edges()) {
     if (!edge.robust || !edge.active) continue;  // sequential edge, or a dropped loop
-    const int from_scan = closer.keyScanIndex(edge.from);
-    const int to_scan = closer.keyScanIndex(edge.to);
-    if (from_scan < 0 || to_scan < 0 ||
-        from_scan >= static_cast<int>(record_of_loop_scan_.size()) ||
-        to_scan >= static_cast<int>(record_of_loop_scan_.size())) {
-      continue;
-    }
-    const ScanRecord& a = records_[record_of_loop_scan_[from_scan]];
-    const ScanRecord& b = records_[record_of_loop_scan_[to_scan]];
-    if (a.iteration < 0 || b.iteration < 0) continue;
+    const ScanRecord* from = recordOf(closer.keyScanIndex(edge.from));
+    const ScanRecord* to = recordOf(closer.keyScanIndex(edge.to));
+    if (from == nullptr || to == nullptr) continue;
+    const ScanRecord& a = *from;
+    const ScanRecord& b = *to;
+    if (a.iteration < first_iteration_ || b.iteration < first_iteration_) continue;
     IterationConstraint c;
-    c.from_iteration = a.iteration;
-    c.to_iteration = b.iteration;
+    c.from_iteration = a.iteration - first_iteration_;
+    c.to_iteration = b.iteration - first_iteration_;
     c.from_offset = between(a.odometry_at_iteration, a.odometry);
     c.to_offset = between(b.odometry_at_iteration, b.odometry);
     c.measurement = edge.measurement;
@@ -647,16 +696,26 @@ std::vector<IterationConstraint> SlamPipeline::loopConstraints() const {
 std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
   std::vector<Pose2> out;
   if (!back_end_ || records_.empty()) return out;
-  const std::vector<StampedPose> optimized = back_end_->drained().scanPoses();
+  const LoopCloser& closer = back_end_->drained();
+  // One pose per loop scan the closer still holds (closer.firstScan() on).
+  const std::vector<StampedPose> optimized = closer.scanPoses();
   std::vector<int> loop_scan_of_record(records_.size(), -1);
-  for (size_t i = 0; i < record_of_loop_scan_.size() && i < optimized.size(); ++i) {
-    loop_scan_of_record[record_of_loop_scan_[i]] = static_cast<int>(i);
+  for (size_t i = 0; i < record_of_loop_scan_.size(); ++i) {
+    const long scan = first_loop_scan_ + static_cast<long>(i) - closer.firstScan();
+    const long record = record_of_loop_scan_[i] - first_record_;
+    if (scan < 0 || record < 0) continue;
+    if (scan >= static_cast<long>(optimized.size())) break;
+    loop_scan_of_record[record] = static_cast<int>(scan);
   }
   const int iterations = static_cast<int>(full_recorder_.iterations().size());
   out.assign(iterations, Pose2());
   std::vector<char> found(iterations, 0);
-  bool have_frame = false;
-  Pose2 map_from_graph;
+  // The whole run: the first scan's filtered pose ties the graph to the map
+  // frame. A bounded history has lost that scan: the frame is the one the
+  // key scans are given in (keyScans()), so the window and the older key
+  // scans agree.
+  bool have_frame = first_record_ > 0 && have_map_from_graph_;
+  Pose2 map_from_graph = map_from_graph_;
   for (size_t r = 0; r < records_.size(); ++r) {
     const ScanRecord& record = records_[r];
     const int scan = loop_scan_of_record[r];
@@ -667,7 +726,7 @@ std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
       map_from_graph = compose(filtered, inverse(optimized[scan].pose));
       have_frame = true;
     }
-    const int k = record.iteration;
+    const int k = record.iteration - first_iteration_;
     if (k < 0 || k >= iterations || found[k]) continue;
     // The iteration's pose = the scan's pose minus the odometry since it.
     out[k] = compose(compose(map_from_graph, optimized[scan].pose),
@@ -683,9 +742,19 @@ std::vector<Pose2> SlamPipeline::loopClosedIterationPoses() const {
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,
                                                          LandmarkGraph* last_problem) const {
   const std::vector<Pose2> initial = loopClosedIterationPoses();
-  FullSmootherResult result =
-      smoothFull(full_recorder_, filter_, loopConstraints(), options_.smoother,
-                 initial.empty() ? nullptr : &initial, last_problem);
+  FullSmootherResult result;
+  if (first_iteration_ > 0 && !initial.empty()) {
+    // A bounded history starts at its oldest iteration: anchored where the
+    // loop-closed graph has it (the frame of the older key scans), as
+    // uncertain as the filter was there.
+    FullSmootherRecorder window = full_recorder_;
+    window.setPrior(initial.front(), full_recorder_.priorCovariance());
+    result =
+        smoothFull(window, filter_, loopConstraints(), options_.smoother, &initial, last_problem);
+  } else {
+    result = smoothFull(full_recorder_, filter_, loopConstraints(), options_.smoother,
+                        initial.empty() ? nullptr : &initial, last_problem);
+  }
   std::vector<StampedPose> out = scanPosesFrom(result.poses);
   if (details) *details = std::move(result);
   return out;

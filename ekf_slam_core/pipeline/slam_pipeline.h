@@ -90,6 +90,17 @@ struct PipelineOptions {
   // unless loop_closure.correction_delay asks it to); false: inline, as the
   // offline runner does. Not a file setting: the program decides.
   bool back_end_thread = false;
+  // History kept for the smoothers and the trajectories: 0 keeps every scan
+  // (the offline runner writes one pose per scan of the whole log); n > 0
+  // keeps at least the newest n scans (trimmed in steps of n / 8, so at
+  // most 9n/8) with the iterations they hang off, so that memory stops
+  // growing with the time a live node runs. The oldest kept iteration then
+  // takes the place of the first pose for the full smoother: its prior is
+  // the filter's pose and covariance at that iteration (with loop closure,
+  // its loop-closed pose). The causal estimate never reads the history, so
+  // the poses a scan is given do not depend on n. Not a file setting: the
+  // program decides (the node's history_max_scans).
+  long history_scans = 0;
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used
@@ -238,7 +249,7 @@ struct ScanRecord {
   Pose2 filtered;                        // the pose given for the scan when it was processed
   Matrix3 covariance = Matrix3::Zero();  // ScanResult::pose_covariance of it
   Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
-  int iteration = -1;  // index into the smoother steps of the iteration this pose hangs off
+  int iteration = -1;  // number of the iteration this pose hangs off (0: the run's first)
   Pose2 odometry_at_iteration;  // the odometry at that iteration
   // The causal estimate given for the scan when it was processed: with loop
   // closure on, the back end's loop-closed graph as it stood after this
@@ -276,8 +287,15 @@ class SlamPipeline {
   EkfSlam& mutableFilter() { return filter_; }
   const PipelineOptions& options() const { return options_; }
   const PipelineCounters& counters() const { return counters_; }
+  // The kept history (options.history_scans): records of scans firstScan()
+  // to recordedScans() − 1, and the iterations from firstIteration() on
+  // (ScanRecord::iteration counts from the first iteration of the run).
   const std::vector<ScanRecord>& scans() const { return records_; }
   const TrajectoryRecorder& iterations() const { return recorder_; }
+  const FullSmootherRecorder& smootherRecord() const { return full_recorder_; }
+  long firstScan() const { return first_record_; }
+  long recordedScans() const { return first_record_ + static_cast<long>(records_.size()); }
+  int firstIteration() const { return first_iteration_; }
   // Per line landmark id: the stretch of the line seen so far and, for a
   // θ-only landmark, its endpoint point landmarks. Empty with points only.
   const std::unordered_map<int, LineSupport>& lineSupport() const;
@@ -294,7 +312,9 @@ class SlamPipeline {
   Pose2 mapToOdom() const;
 
   // Poses for every scan from the full smoother's iteration poses (scans
-  // between iterations follow their odometry from the last iteration). Runs
+  // between iterations follow their odometry from the last iteration); with
+  // a bounded history, for the kept scans, the smoother anchored at the
+  // oldest kept iteration (see history_scans). Runs
   // the batch optimisation on every call; `details` (if given) receives its
   // result, `last_problem` (if given) the problem of its last optimisation
   // (see smoothFull).
@@ -352,6 +372,7 @@ class SlamPipeline {
   // rooms.enabled: the rooms from the walls mapped now; every point landmark relabelled.
   void rebuildRooms();
   void reanchorFilter(const Pose2& causal, const Pose2& published);
+  void trimHistory();  // options_.history_scans
   std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
   std::vector<IterationConstraint> loopConstraints() const;
   std::vector<Pose2> loopClosedIterationPoses() const;  // empty without loop closure
@@ -369,15 +390,20 @@ class SlamPipeline {
   EkfSlam filter_;
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;
-  std::vector<int> record_of_loop_scan_;  // records_ index of each scan given to the loop closer
-  std::vector<Pose2> key_filtered_;       // the filter's pose at each key scan (map frame)
-  std::deque<Pose2> pending_filtered_;    // the filter's pose at loop scans pending_base_ …
-  long pending_base_ = 0;                 // … on, whose key scans the back end may still report
+  // Record number of each scan given to the loop closer (from loop scan
+  // first_loop_scan_ on; both count from the run's first).
+  std::vector<int> record_of_loop_scan_;
+  int first_loop_scan_ = 0;
+  std::vector<Pose2> key_filtered_;     // the filter's pose at each key scan (map frame)
+  std::deque<Pose2> pending_filtered_;  // the filter's pose at loop scans pending_base_ …
+  long pending_base_ = 0;               // … on, whose key scans the back end may still report
   std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
   bool have_map_from_graph_ = false;  // map_from_graph_ is set (at the first recorded scan)
   Pose2 map_from_graph_;              // the loop closer's frame in the map frame
   PipelineCounters counters_;
-  std::vector<ScanRecord> records_;
+  std::vector<ScanRecord> records_;  // scans first_record_ on
+  long first_record_ = 0;
+  int first_iteration_ = 0;  // iteration number of recorder_'s and full_recorder_'s first
   bool initialised_ = false;
   Pose2 last_odometry_;         // control-source pose at the last iteration (or re-anchor)
   Pose2 last_raw_odometry_;     // the robot's raw odometry at that iteration

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <random>
@@ -596,6 +598,162 @@ TEST(SlamPipeline, AMoveMadeWhilePausedIsKeptNotDroppedAsAJump) {
       }
     }
   }
+}
+
+}  // namespace
+}  // namespace ekf_slam
+
+namespace ekf_slam {
+namespace {
+
+// Three laps around the island of the carton room with drifting odometry,
+// the same scans given to a pipeline that keeps every scan and to one whose
+// history is bounded (PipelineOptions::history_scans), scan by scan.
+struct HistoryRun {
+  long loops_bounded = 0, loops_full = 0;
+  size_t most_records = 0, most_steps = 0, most_iterations = 0, most_closer_scans = 0;
+  size_t least_records_after_warm_up = 0;
+  long first_scan = 0;
+  std::vector<Pose2> truth;  // map frame (the first pose), per scan
+  std::vector<StampedPose> smoothed_bounded, smoothed_full, rts_bounded;
+  std::vector<ScanRecord> records;  // the bounded pipeline's, at the end
+};
+
+HistoryRun driveWithBoundedHistory(bool loop_closure, long history) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(7);
+  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/loop_closure);
+  options.loop_closure.enabled = loop_closure;
+  options.loop_closure.min_loop_travel = 6.0;
+  options.loop_closure.correction_delay = 0;
+  PipelineOptions bounded_options = options;
+  bounded_options.history_scans = history;
+  EXPECT_EQ(bounded_options.validate(), "");
+  SlamPipeline full(options), bounded(bounded_options);
+  const double radius = 2.3, step = 0.08;
+  const int scans = static_cast<int>(3.0 * 2.0 * kPi * radius / step);
+  HistoryRun run;
+  Pose2 odometry, previous, first;
+  for (int i = 0; i <= scans; ++i) {
+    const double a = step * i / radius;
+    const Pose2 truth(3.0 + radius * std::sin(a), 1.5 - radius * std::cos(a), a);
+    if (i == 0) first = truth;
+    if (i > 0) odometry = compose(odometry, compose(between(previous, truth), Pose2(0, 0, 0.002)));
+    previous = truth;
+    run.truth.push_back(between(first, truth));
+    const Scan scan = scanAt(world, compose(truth, laser), 0.1 * i, &rng);
+    const ScanResult a_full = full.processScan(scan, odometry);
+    const ScanResult a_bounded = bounded.processScan(scan, odometry);
+    // What a node publishes does not depend on the bound, to the bit.
+    EXPECT_EQ(a_full.outcome, a_bounded.outcome) << "scan " << i;
+    EXPECT_TRUE(a_full.pose.x == a_bounded.pose.x && a_full.pose.y == a_bounded.pose.y &&
+                a_full.pose.theta == a_bounded.pose.theta)
+        << "scan " << i;
+    EXPECT_TRUE(a_full.causal_pose.x == a_bounded.causal_pose.x &&
+                a_full.causal_pose.y == a_bounded.causal_pose.y &&
+                a_full.causal_pose.theta == a_bounded.causal_pose.theta)
+        << "scan " << i;
+    if (::testing::Test::HasFailure()) return run;
+    run.most_records = std::max(run.most_records, bounded.scans().size());
+    run.most_steps = std::max(run.most_steps, bounded.iterations().steps().size());
+    run.most_iterations =
+        std::max(run.most_iterations, bounded.smootherRecord().iterations().size());
+    if (loop_closure) {
+      const LoopCloser& closer = *bounded.loopCloser();
+      run.most_closer_scans = std::max(
+          run.most_closer_scans, static_cast<size_t>(closer.scanCount() - closer.firstScan()));
+    }
+    if (i >= 2 * history) {
+      run.least_records_after_warm_up =
+          run.least_records_after_warm_up == 0
+              ? bounded.scans().size()
+              : std::min(run.least_records_after_warm_up, bounded.scans().size());
+    }
+  }
+  EXPECT_EQ(full.scans().size(), run.truth.size());
+  EXPECT_EQ(bounded.recordedScans(), static_cast<long>(run.truth.size()));
+  run.loops_full = full.backEndCounters().accepted;
+  run.loops_bounded = bounded.backEndCounters().accepted;
+  run.first_scan = bounded.firstScan();
+  run.records = bounded.scans();
+  run.smoothed_full = full.smoothedScanPoses();
+  run.smoothed_bounded = bounded.smoothedScanPoses();
+  run.rts_bounded = bounded.rtsScanPoses();
+  return run;
+}
+
+// Mean position error of `poses` (scans first_scan on) against the truth.
+double meanError(const std::vector<StampedPose>& poses, const std::vector<Pose2>& truth,
+                 long first_scan) {
+  double sum = 0.0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    sum += (poses[i].pose.translation() - truth[first_scan + i].translation()).norm();
+  }
+  return sum / static_cast<double>(poses.size());
+}
+
+void expectBoundedHistory(bool loop_closure) {
+  const long history = 60;
+  const size_t most = history + history / 8;  // the bound plus its trimming step
+  const HistoryRun run = driveWithBoundedHistory(loop_closure, history);
+  if (::testing::Test::HasFailure()) return;
+  // The per-scan containers stay at the bound over 540 scans.
+  EXPECT_LE(run.most_records, most);
+  EXPECT_GE(run.least_records_after_warm_up, static_cast<size_t>(history));
+  EXPECT_LE(run.most_steps, most);
+  EXPECT_LE(run.most_iterations, most);
+  EXPECT_EQ(run.most_steps, run.most_iterations);
+  if (loop_closure) {
+    EXPECT_GT(run.most_closer_scans, 0u);
+    EXPECT_LE(run.most_closer_scans, most + history / 8);
+    EXPECT_GT(run.loops_full, 0);
+    EXPECT_EQ(run.loops_bounded, run.loops_full);
+  }
+  EXPECT_GE(run.first_scan, static_cast<long>(run.truth.size()) - static_cast<long>(most));
+  // The smoothers cover the kept scans, with their stamps.
+  ASSERT_EQ(run.smoothed_bounded.size(), run.records.size());
+  ASSERT_EQ(run.rts_bounded.size(), run.records.size());
+  for (size_t i = 0; i < run.records.size(); ++i) {
+    EXPECT_EQ(run.smoothed_bounded[i].stamp, run.records[i].stamp);
+    EXPECT_TRUE(run.smoothed_bounded[i].pose.allFinite()) << i;
+    EXPECT_TRUE(run.rts_bounded[i].pose.allFinite()) << i;
+  }
+  // The window smoothed from its anchor is as good as the whole run's
+  // smoothing over the same scans, and close to it.
+  const double bounded_error = meanError(run.smoothed_bounded, run.truth, run.first_scan);
+  const std::vector<StampedPose> full_window(run.smoothed_full.begin() + run.first_scan,
+                                             run.smoothed_full.end());
+  const double full_error = meanError(full_window, run.truth, run.first_scan);
+  double largest_difference = 0.0;
+  for (size_t i = 0; i < full_window.size(); ++i) {
+    largest_difference = std::max(
+        largest_difference,
+        (full_window[i].pose.translation() - run.smoothed_bounded[i].pose.translation()).norm());
+  }
+  std::cout << (loop_closure ? "loop closure on" : "loop closure off") << ": smoothed window of "
+            << run.records.size() << " scans, mean error " << bounded_error
+            << " m (whole run's smoothing there: " << full_error << " m), largest difference "
+            << largest_difference << " m\n";
+  EXPECT_LT(bounded_error, 0.1);
+  EXPECT_LT(bounded_error, full_error + 0.03);
+  EXPECT_LT(largest_difference, 0.1);
+}
+
+TEST(SlamPipeline, ABoundedHistoryKeepsCausalPosesAndSmoothsItsWindow) {
+  expectBoundedHistory(/*loop_closure=*/false);
+}
+
+TEST(SlamPipeline, ABoundedHistoryWithLoopClosureKeepsCausalPosesAndSmoothsItsWindow) {
+  expectBoundedHistory(/*loop_closure=*/true);
+}
+
+TEST(SlamPipeline, TheHistoryBoundIsValidated) {
+  PipelineOptions options;
+  options.history_scans = -1;
+  EXPECT_NE(options.validate().find("history_scans"), std::string::npos);
+  options.history_scans = 0;
+  EXPECT_EQ(options.validate(), "");
 }
 
 }  // namespace

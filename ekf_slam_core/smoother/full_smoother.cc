@@ -69,6 +69,35 @@ void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
   iterations_.push_back(std::move(it));
 }
 
+void FullSmootherRecorder::dropFront(size_t count) {
+  count = std::min(count, iterations_.size());
+  if (count == 0) return;
+  iterations_.erase(iterations_.begin(), iterations_.begin() + count);
+  // What the remaining sightings can still ask for: the merge chain of each
+  // id they name, and the last estimate of every id on it. Later sightings
+  // name landmarks the filter holds, whose merges are recorded as they come.
+  std::unordered_map<int, int> merged_into;
+  std::unordered_map<int, Vector2> last_estimate;
+  auto keep = [&](int id) {
+    const auto estimate = last_estimate_.find(id);
+    if (estimate != last_estimate_.end()) last_estimate.insert(*estimate);
+  };
+  for (const SmootherIteration& it : iterations_) {
+    for (const LandmarkSighting& s : it.sightings) {
+      int id = s.landmark_id;
+      keep(id);
+      for (auto next = merged_into_.find(id); next != merged_into_.end();
+           next = merged_into_.find(id)) {
+        if (!merged_into.insert(*next).second) break;  // this chain is kept already
+        id = next->second;
+        keep(id);
+      }
+    }
+  }
+  merged_into_ = std::move(merged_into);
+  last_estimate_ = std::move(last_estimate);
+}
+
 int FullSmootherRecorder::survivorOf(int id) const {
   // Merges form chains (a into b, later b into c); follow them to the end.
   for (auto it = merged_into_.find(id); it != merged_into_.end(); it = merged_into_.find(id)) {

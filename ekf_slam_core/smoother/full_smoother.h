@@ -142,6 +142,12 @@ class FullSmootherRecorder {
                     const std::vector<PointObservation>& observations,
                     const IterationReport& report);
 
+  // Forgets the oldest `count` iterations (a bounded history), and the
+  // merges and landmark estimates only they referred to. The caller gives
+  // the new first iteration its prior (setPrior): the smoother then starts
+  // there, as from the first pose of a run.
+  void dropFront(size_t count);
+
   const std::vector<SmootherIteration>& iterations() const { return iterations_; }
   // The landmark a sighting of `id` belongs to after all merges so far.
   int survivorOf(int id) const;

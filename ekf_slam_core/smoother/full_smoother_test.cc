@@ -222,5 +222,39 @@ TEST(FullSmoother, MergedLandmarksShareOneNode) {
   EXPECT_EQ(record.survivorOf(7), 7);
 }
 
+// A bounded history: dropFront() forgets the oldest iterations and the
+// merges only they referred to; the kept sightings still find their
+// survivors.
+TEST(FullSmoother, DroppingTheOldestIterationsKeepsTheMergesTheRestNeeds) {
+  FullSmootherRecorder record;
+  FilterOptions options;
+  EkfSlam filter(options);
+  const std::vector<PointObservation> one(1);
+  auto add = [&](double stamp, int sighted, std::vector<std::pair<int, int>> merged) {
+    IterationReport report;
+    report.matches = {PointMatch{0, sighted}};
+    report.merged = std::move(merged);
+    record.addIteration(stamp, filter, nullptr, one, report);
+  };
+  add(0.0, 5, {});
+  add(1.0, 9, {{2, 5}});          // 5 into 2
+  add(2.0, 3, {{1, 2}, {4, 9}});  // 2 into 1, 9 into 4
+  add(3.0, 4, {{6, 4}});          // 4 into 6
+  EXPECT_EQ(record.survivorOf(5), 1);
+  EXPECT_EQ(record.survivorOf(9), 6);
+
+  record.dropFront(1);
+  ASSERT_EQ(record.iterations().size(), 3u);
+  EXPECT_EQ(record.iterations().front().stamp, 1.0);
+  EXPECT_EQ(record.survivorOf(9), 6);  // 9 → 4 → 6: still sighted
+  EXPECT_EQ(record.survivorOf(4), 6);
+  EXPECT_EQ(record.survivorOf(5), 5);  // only the dropped iteration saw 5
+  EXPECT_EQ(record.survivorOf(2), 2);
+
+  record.dropFront(10);  // more than there are: all go
+  EXPECT_TRUE(record.iterations().empty());
+  EXPECT_EQ(record.survivorOf(9), 9);
+}
+
 }  // namespace
 }  // namespace ekf_slam

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 
 namespace ekf_slam {
 
@@ -22,6 +23,10 @@ void TrajectoryRecorder::addFiltered(double stamp, const Pose2& pose, const Matr
   step.filtered = pose;
   step.filtered_cov = covariance;
   steps_.push_back(step);
+}
+
+void TrajectoryRecorder::dropFront(size_t count) {
+  steps_.erase(steps_.begin(), steps_.begin() + std::min(count, steps_.size()));
 }
 
 std::vector<SmoothedPose> smoothTrajectory(const std::vector<SmootherStep>& steps) {

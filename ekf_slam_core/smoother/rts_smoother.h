@@ -47,6 +47,9 @@ class TrajectoryRecorder {
   // Replaces the last filtered estimate (the update after the prediction).
   const std::vector<SmootherStep>& steps() const { return steps_; }
   void clear() { steps_.clear(); }
+  // Forgets the oldest `count` steps (a bounded history): the chain then
+  // starts at the step that was number `count`.
+  void dropFront(size_t count);
 
  private:
   std::vector<SmootherStep> steps_;

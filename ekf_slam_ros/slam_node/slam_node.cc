@@ -144,6 +144,10 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   laser_pose_ = laser_pose;
   PipelineOptions options = config_.pipeline;
   options.back_end_thread = true;  // scan processing never waits for a loop search
+  // A node runs for hours: the history ~smooth re-solves is bounded, so
+  // memory follows the map, not the time (the causal poses do not depend
+  // on it). The offline runner keeps every scan: it writes one pose each.
+  options.history_scans = params_.history_max_scans;
   if (start_pose_) {
     options.initial_pose = *start_pose_;
     options.initial_pose_covariance = start_covariance_;
@@ -191,15 +195,26 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
       times->add(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
   } timer{started, processing_times_.get()};
-  const size_t records_before = pipeline_->scans().size();
+  const long records_before = pipeline_->recordedScans();
   const ScanResult result = pending.scan ? pipeline_->processScan(*pending.scan, odometry)
                                          : pipeline_->processFeatures(pending.header.stamp.toSec(),
                                                                       *pending.features, odometry);
   // ~smooth draws its grid from the back end's key scans; without a back
-  // end (loop closure off) it needs every scan's ranges.
+  // end (loop closure off) it needs the scans' ranges.
   if (pending.scan && !config_.pipeline.loop_closure.enabled &&
-      pipeline_->scans().size() > records_before) {
+      pipeline_->recordedScans() > records_before) {
+    if (stored_scans_.empty()) stored_first_ = records_before;
     stored_scans_.emplace_back(*pending.scan);
+    stored_scans_.back().pose = result.causal_pose;
+    if (params_.history_max_scans > 0 &&
+        static_cast<long>(stored_scans_.size()) > params_.history_max_scans) {
+      // One scan leaves per scan: the grid update costs a scan's ray cast.
+      if (!history_grid_) history_grid_.emplace(config_.map);
+      const StoredScan& oldest = stored_scans_.front();
+      history_grid_->insertScan(compose(oldest.pose, *laser_pose_), oldest.toScan());
+      stored_scans_.pop_front();
+      ++stored_first_;
+    }
   }
   if (step_pending_) {  // ~step: this was the one scan; pause until the next step
     step_pending_ = false;
@@ -291,6 +306,8 @@ void SlamNode::resetState() {
   last_accepted_stamp_.reset();
   step_pending_ = false;
   stored_scans_.clear();
+  stored_first_ = 0;
+  history_grid_.reset();
   path_.poses.clear();
   odometry_path_.poses.clear();
   odometry_anchor_.reset();

@@ -107,6 +107,9 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("processing time p99 [ms]", 1e3 * processing_times_->percentile(99.0));
   status.add("processing time max [ms]", 1e3 * processing_times_->max());
   status.add("iterations", iterations);
+  // The history ~smooth re-solves (at most 9/8 of history_max_scans).
+  status.add("scans kept for smoothing",
+             pipeline_ ? static_cast<long>(pipeline_->scans().size()) : 0L);
   status.addf("iteration rate (Hz)", "%.2f", rate);
   status.add("landmarks", pipeline_ ? pipeline_->filter().landmarkCount() : 0);
   status.add("state size", pipeline_ ? pipeline_->filter().stateDim() : EkfSlam::kPoseDim);

@@ -88,6 +88,7 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
   read.text("initial_map", &p->initial_map, /*required=*/false);
   read.number("diagnostic_period", &p->diagnostic_period, 0.01, 60.0);
   read.integer("path_max_poses", &p->path_max_poses, 0, 100000000);
+  read.integer("history_max_scans", &p->history_max_scans, 0, 100000000);
   read.number("map_update_interval", &p->map_update_interval, 0.0, 3600.0);
   read.number("max_future_stamp", &p->max_future_stamp, 0.0, 1e6);
   read.text("rear_scan_topic", &p->rear_scan_topic, /*required=*/false);

@@ -39,7 +39,11 @@ struct SlamNodeParams {
   bool start_paused = false;           // drop scans until ~resume (a recorder can start first)
   std::string initial_map;             // landmark map file loaded at start ("" none)
   double diagnostic_period = 1.0;      // s
-  int path_max_poses = 10000;          // newest poses in `path` (0: all); the smoother keeps all
+  int path_max_poses = 10000;          // newest poses in `path` (0: all)
+  // Newest scans whose history ~smooth re-solves (0: every scan, memory
+  // then grows with the run). Older scans live on in the key scans (loop
+  // closure on) or in an occupancy grid of their own (off).
+  int history_max_scans = 10000;
   // s between occupancy grids on `map`, built in the background from the
   // loop-closed key scans (0: only on ~smooth). Needs loop closure on.
   double map_update_interval = 5.0;

@@ -29,6 +29,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -707,6 +708,76 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   }
   EXPECT_GT(occupied, 50) << "the room's walls";
   EXPECT_GT(free_cells, occupied) << "the room's inside";
+}
+
+double headingOf(const geometry_msgs::Quaternion& q);
+
+// The fraction of points along the middle of each wall of the room (room
+// frame = odom) whose grid cell, or a neighbour, is occupied; `map_from_odom`
+// places the room in the grid's frame. The lowest of the four.
+double leastWallCoverage(const nav_msgs::OccupancyGrid& grid, const Pose2& map_from_odom) {
+  const std::vector<std::pair<Vector2, Vector2>> walls = {{{-2.5, -3.0}, {2.5, -3.0}},
+                                                          {{-2.5, 3.0}, {2.5, 3.0}},
+                                                          {{-4.0, -1.5}, {-4.0, 1.5}},
+                                                          {{4.0, -1.5}, {4.0, 1.5}}};
+  const double resolution = grid.info.resolution;
+  auto occupied = [&](const Vector2& p) {
+    const int cx = static_cast<int>(std::floor((p.x() - grid.info.origin.position.x) / resolution));
+    const int cy = static_cast<int>(std::floor((p.y() - grid.info.origin.position.y) / resolution));
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int x = cx + dx, y = cy + dy;
+        if (x < 0 || y < 0 || x >= static_cast<int>(grid.info.width) ||
+            y >= static_cast<int>(grid.info.height)) {
+          continue;
+        }
+        if (grid.data[static_cast<size_t>(y) * grid.info.width + x] > 65) return true;
+      }
+    }
+    return false;
+  };
+  double least = 1.0;
+  for (const auto& [from, to] : walls) {
+    const int samples = 50;
+    int hits = 0;
+    for (int i = 0; i < samples; ++i) {
+      const Vector2 room = from + (to - from) * (i + 0.5) / samples;
+      hits += occupied(transformFrom(map_from_odom, room));
+    }
+    least = std::min(least, static_cast<double>(hits) / samples);
+  }
+  return least;
+}
+
+// ~smooth with history_max_scans: 30 (test/slam_node_bounded_history.test,
+// with and without loop closure). The node keeps at most 9/8 of it, and
+// ~smooth, over those 3 s of the circle, still gives a grid with every wall
+// of the room: the older scans reach it through the key scans at their
+// loop-closed poses, or through the grid the node keeps of them.
+TEST_F(SlamNodeTest, ABoundedHistoryStillSmoothsAndMapsTheWholeRoom) {
+  // A whole turn of the circle (42 s at 0.15 rad/s) and more.
+  ASSERT_TRUE(waitFor([&] { return observer_.diagnostic("scans processed") > 500; }, 120.0))
+      << observer_.diagnostic("scans processed") << " scans processed";
+  ASSERT_TRUE(freshDiagnostics());
+  const double kept = observer_.diagnostic("scans kept for smoothing");
+  EXPECT_GE(kept, 30.0);
+  EXPECT_LE(kept, 33.0);
+  std_srvs::Trigger smooth;
+  ASSERT_TRUE(call("smooth", &smooth));
+  ASSERT_TRUE(smooth.response.success) << smooth.response.message;
+  EXPECT_NE(smooth.response.message.find("history_max_scans"), std::string::npos)
+      << smooth.response.message;
+  EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() >= 30; }, 3.0));
+  ASSERT_TRUE(waitFor([&] { return observer_.grid().info.width > 0; }, 3.0));
+  // map → odom from the last published pose and the odometry at its stamp.
+  const geometry_msgs::PoseWithCovarianceStamped pose = observer_.pose();
+  const Pose2 map_pose(pose.pose.pose.position.x, pose.pose.pose.position.y,
+                       headingOf(pose.pose.pose.orientation));
+  const Pose2 map_from_odom = compose(map_pose, inverse(robot_.odometryAt(pose.header.stamp)));
+  const double coverage = leastWallCoverage(observer_.grid(), map_from_odom);
+  std::cout << "~smooth: " << smooth.response.message << "; least wall coverage " << coverage
+            << "\n";
+  EXPECT_GT(coverage, 0.6) << "a wall of the room is missing from the ~smooth grid";
 }
 
 bool sameGrid(const nav_msgs::OccupancyGrid& map, const GridMapFile& file) {

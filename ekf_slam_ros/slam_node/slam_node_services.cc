@@ -45,12 +45,18 @@ std::string landmarkCounts(const LandmarkMapFile& map) {
 }
 
 // The key scans moved to the smoothed pose of their scan (matched by
-// stamp); a key scan with no smoothed pose is left out.
+// stamp); a key scan with no smoothed pose is left out, unless it is older
+// than the smoothed scans (a bounded history): it keeps its loop-closed
+// pose, the frame the smoothed window is anchored in.
 std::vector<SlamPipeline::KeyScan> keysAtSmoothedPoses(std::vector<SlamPipeline::KeyScan> keys,
                                                        const std::vector<StampedPose>& smoothed) {
   std::vector<SlamPipeline::KeyScan> moved;
   moved.reserve(keys.size());
   for (SlamPipeline::KeyScan& key : keys) {
+    if (!smoothed.empty() && key.stamp < smoothed.front().stamp) {
+      moved.push_back(std::move(key));
+      continue;
+    }
     const auto at =
         std::lower_bound(smoothed.begin(), smoothed.end(), key.stamp,
                          [](const StampedPose& pose, double stamp) { return pose.stamp < stamp; });
@@ -242,29 +248,45 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     response.message = "no scans processed yet";
     return true;
   }
+  // With history_max_scans, the smoother covers the newest scans only.
   const std::vector<StampedPose> smoothed = pipeline_->smoothedScanPoses();
   std_msgs::Header header;
   header.stamp = last_scan_stamp_;
   header.frame_id = params_.map_frame;
   nav_msgs::Path path;
   path.header = header;
-  OccupancyGrid grid(config_.map);
-  for (size_t i = 0; i < smoothed.size(); ++i) {
+  auto addToPath = [&](double stamp, const Pose2& pose) {
     geometry_msgs::PoseStamped p;
-    p.header.stamp = ros::Time(smoothed[i].stamp);
+    p.header.stamp = ros::Time(stamp);
     p.header.frame_id = params_.map_frame;
-    p.pose = toPoseMessage(smoothed[i].pose);
+    p.pose = toPoseMessage(pose);
     path.poses.push_back(p);
-    if (i < stored_scans_.size()) {
-      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[i].toScan());
-    }
-  }
-  smoothed_path_publisher_.publish(path);
+  };
   // With loop closure on, the grid is cast from the back end's key scans
   // (the readings it keeps anyway) at their smoothed poses: the node keeps
   // no ranges of its own, and its memory grows with the key scans only.
+  // Key scans older than the smoothed scans keep their loop-closed poses,
+  // and lead the path.
   std::vector<SlamPipeline::KeyScan> keys;
   if (stored_scans_.empty()) keys = keysAtSmoothedPoses(pipeline_->keyScans(true), smoothed);
+  long older_keys = 0;
+  for (const SlamPipeline::KeyScan& key : keys) {
+    if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
+    addToPath(key.stamp, key.pose);
+    ++older_keys;
+  }
+  // Without loop closure the stored scans are cast at their smoothed poses,
+  // over the grid of the scans older than them (history_grid_).
+  OccupancyGrid grid = history_grid_ ? *history_grid_ : OccupancyGrid(config_.map);
+  const long first_record = pipeline_->firstScan();
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    addToPath(smoothed[i].stamp, smoothed[i].pose);
+    const long stored = first_record + static_cast<long>(i) - stored_first_;
+    if (stored >= 0 && stored < static_cast<long>(stored_scans_.size())) {
+      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[stored].toScan());
+    }
+  }
+  smoothed_path_publisher_.publish(path);
   if (stored_scans_.empty() && keys.empty()) {
     // input: features: the node never saw the ranges a grid is cast from.
     response.success = true;
@@ -280,8 +302,14 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
 
   std::ostringstream text;
   text << "smoothed " << smoothed.size() << " scan poses (" << pipeline_->counters().iterations
-       << " iterations); map " << grid.width() << " x " << grid.height() << " cells at "
-       << grid.resolution() << " m";
+       << " iterations";
+  if (pipeline_->firstScan() > 0) {
+    text << "; the newest " << smoothed.size() << " of " << pipeline_->recordedScans()
+         << " scans, history_max_scans";
+    if (older_keys > 0) text << ", before them " << older_keys << " loop-closed key scans";
+  }
+  text << "); map " << grid.width() << " x " << grid.height() << " cells at " << grid.resolution()
+       << " m";
   response.success = true;
   response.message = text.str();
   ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
