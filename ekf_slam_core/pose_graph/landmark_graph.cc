@@ -109,8 +109,9 @@ namespace {
 // values change. The first assembly collects triplets and notes where each
 // one lands in the compressed matrix (AssemblyPattern); later assemblies
 // that add the same entries in the same order write straight into those
-// slots. Each slot receives its contributions in the order setFromTriplets
-// sums duplicates, so H is bit for bit the same either way.
+// slots of the same matrix. Each slot receives its contributions in the
+// order setFromTriplets sums duplicates, so H is bit for bit the same
+// either way.
 struct AssemblyPattern {
   Eigen::SparseMatrix<double> H;  // compressed, every diagonal entry explicit
   std::vector<int> slot;          // per entry added: its index in H's values
@@ -118,14 +119,13 @@ struct AssemblyPattern {
 
 class NormalEquations {
  public:
-  // With `pattern` null the entries are collected as triplets; otherwise
-  // they are added into a copy of pattern->H, zeroed, in the order the
-  // pattern was recorded in.
-  NormalEquations(int unknowns, size_t expected_entries, const AssemblyPattern* pattern)
-      : b_(Eigen::VectorXd::Zero(unknowns)), pattern_(pattern) {
-    if (pattern_) {
-      H_ = pattern_->H;
-      std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
+  // With `fill` null the entries are collected as triplets; otherwise they
+  // are added into fill->H, zeroed first, in the order its slots were
+  // recorded in (H is then assembled where it lives, with no copy).
+  NormalEquations(int unknowns, size_t expected_entries, AssemblyPattern* fill)
+      : b_(Eigen::VectorXd::Zero(unknowns)), fill_(fill) {
+    if (fill_) {
+      std::fill(fill_->H.valuePtr(), fill_->H.valuePtr() + fill_->H.nonZeros(), 0.0);
     } else {
       triplets_.reserve(expected_entries);
     }
@@ -153,31 +153,30 @@ class NormalEquations {
   }
 
   // H with an explicit entry on every diagonal (an unknown no edge touches
-  // stays regular), compressed. With a pattern: false when the entries
-  // added were not those of the pattern (then assemble afresh without one).
-  bool finish(Eigen::SparseMatrix<double>* H, AssemblyPattern* record) {
-    if (pattern_) {
-      if (added_ != pattern_->slot.size() || mismatch_) return false;
-      for (int k = 0; k < H_.outerSize(); ++k) H_.coeffRef(k, k) += 0.0;
-      *H = std::move(H_);
+  // stays regular), compressed, in pattern->H; from triplets the pattern's
+  // slots are recorded too. Filling: false when the entries added were not
+  // those of the pattern (then assemble afresh from triplets).
+  bool finish(AssemblyPattern* pattern) {
+    Eigen::SparseMatrix<double>& H = pattern->H;
+    if (fill_) {
+      if (added_ != fill_->slot.size() || mismatch_) return false;
+      for (int k = 0; k < H.outerSize(); ++k) H.coeffRef(k, k) += 0.0;
       return true;
     }
-    H->resize(b_.size(), b_.size());
-    H->setFromTriplets(triplets_.begin(), triplets_.end());
-    for (int k = 0; k < b_.size(); ++k) H->coeffRef(k, k) += 0.0;
-    H->makeCompressed();
-    if (record) {
-      record->H = *H;
-      record->slot.resize(triplets_.size());
-      const int* outer = H->outerIndexPtr();
-      const int* inner = H->innerIndexPtr();
-      for (size_t t = 0; t < triplets_.size(); ++t) {
-        const int col = triplets_[t].col();
-        const int* at =
-            std::lower_bound(inner + outer[col], inner + outer[col + 1], triplets_[t].row());
-        record->slot[t] = static_cast<int>(at - inner);
-      }
+    H.resize(b_.size(), b_.size());
+    H.setFromTriplets(triplets_.begin(), triplets_.end());
+    for (int k = 0; k < b_.size(); ++k) H.coeffRef(k, k) += 0.0;
+    H.makeCompressed();
+    pattern->slot.resize(triplets_.size());
+    const int* outer = H.outerIndexPtr();
+    const int* inner = H.innerIndexPtr();
+    for (size_t t = 0; t < triplets_.size(); ++t) {
+      const int col = triplets_[t].col();
+      const int* at =
+          std::lower_bound(inner + outer[col], inner + outer[col + 1], triplets_[t].row());
+      pattern->slot[t] = static_cast<int>(at - inner);
     }
+    triplets_ = {};
     return true;
   }
   const Eigen::VectorXd& gradient() const { return b_; }
@@ -189,13 +188,13 @@ class NormalEquations {
     for (int i = 0; i < block.rows(); ++i) {
       for (int j = 0; j < block.cols(); ++j) {
         if (row + i < col + j) continue;
-        if (!pattern_) {
+        if (!fill_) {
           triplets_.emplace_back(row + i, col + j, block(i, j));
-        } else if (added_ < pattern_->slot.size()) {
+        } else if (added_ < fill_->slot.size()) {
           // The slot must hold this very entry, or the edges differ.
-          const int slot = pattern_->slot[added_++];
-          mismatch_ |= H_.innerIndexPtr()[slot] != row + i;
-          H_.valuePtr()[slot] += block(i, j);
+          const int slot = fill_->slot[added_++];
+          mismatch_ |= fill_->H.innerIndexPtr()[slot] != row + i;
+          fill_->H.valuePtr()[slot] += block(i, j);
         } else {
           mismatch_ = true;
         }
@@ -205,8 +204,7 @@ class NormalEquations {
 
   std::vector<Eigen::Triplet<double>> triplets_;
   Eigen::VectorXd b_;
-  const AssemblyPattern* pattern_;
-  Eigen::SparseMatrix<double> H_;
+  AssemblyPattern* fill_;
   size_t added_ = 0;
   bool mismatch_ = false;
 };
@@ -271,19 +269,19 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
   const size_t expected_entries =
       36 * (relatives_.size() + priors_.size()) + 25 * observations_.size();
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    Eigen::SparseMatrix<double> H;
     std::optional<NormalEquations> normal;
     normal.emplace(unknowns, expected_entries, have_pattern ? &pattern : nullptr);
     assemble(*normal);
-    if (!normal->finish(&H, &pattern)) {
+    if (!normal->finish(&pattern)) {
       // An edge dropped out or came back (its error could not be formed):
       // a new pattern, analysed afresh.
       normal.emplace(unknowns, expected_entries, nullptr);
       assemble(*normal);
-      normal->finish(&H, &pattern);
+      normal->finish(&pattern);
       pattern_known = false;
     }
     have_pattern = true;
+    const Eigen::SparseMatrix<double>& H = pattern.H;
     // The sparsity pattern of H is the same at every step (only values
     // change), so the ordering and symbolic factorisation are done once.
     if (!pattern_known) {
