@@ -286,7 +286,8 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
     // change), so the ordering and symbolic factorisation are done once.
     if (!pattern_known) {
       solver.analyzePattern(H);
-      pattern_known = false;
+      pattern_known = true;
+      ++summary.symbolic_analyses;
     }
 
     const double cost_before = summary.final_cost;

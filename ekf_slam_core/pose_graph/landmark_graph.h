@@ -76,6 +76,9 @@ struct LandmarkGraphOptions {
 
 struct LandmarkGraphSummary {
   int iterations = 0;
+  // Orderings and symbolic factorisations of H: one per optimisation, and
+  // one more each time an edge drops out or comes back.
+  int symbolic_analyses = 0;
   double initial_cost = 0.0;
   double final_cost = 0.0;
   bool converged = false;
