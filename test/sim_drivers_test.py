@@ -13,13 +13,11 @@ Checks, on a real roscore with real pseudo-terminals:
     waypoint (within goal tolerance plus odometry drift);
   - driven on into a carton, the robot stalls at robot_radius from it.
 """
-import bisect
 import math
 import threading
 import time
 import unittest
 
-import genpy.dynamic
 import rospy
 import rostest
 import yaml
@@ -29,7 +27,8 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool
 
 from ekf_slam_tools.grids import clearance, ray_cast
-from ekf_slam_tools.se2 import compose, wrap, yaw_of
+from ekf_slam_tools.messages import decode
+from ekf_slam_tools.se2 import compose, interpolate, wrap, yaw_of
 
 EXPECTED_BEAMS = 181          # 180 deg at 1 deg (config/lms200.yaml)
 MIN_SCAN_RATE = 8.0           # Hz; 9.38 Hz expected at 38400 baud
@@ -108,23 +107,14 @@ class Listener:
         self.stalled = self.stalled or message.data
 
     def on_static(self, raw):
-        header = raw._connection_header
-        types = genpy.dynamic.generate_dynamic(header["type"], header["message_definition"])
-        message = types[header["type"]]().deserialize(raw._buff)
-        for transform in message.transforms:
+        for transform in decode(raw).transforms:
             self.static[(transform.header.frame_id, transform.child_frame_id)] = transform
 
     def truth_at(self, stamp):
         """World pose at `stamp`, interpolated; None outside the history."""
         with self.lock:
-            times = [t for t, _ in self.truth]
-            i = bisect.bisect_left(times, stamp)
-            if i == 0 or i >= len(times):
-                return None
-            (t0, p0), (t1, p1) = self.truth[i - 1], self.truth[i]
-        f = (stamp - t0) / (t1 - t0) if t1 > t0 else 0.0
-        return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]),
-                wrap(p0[2] + f * wrap(p1[2] - p0[2])))
+            track = [(t,) + tuple(pose) for t, pose in self.truth]
+        return interpolate(track, stamp)
 
 
 class SimDriversTest(unittest.TestCase):

@@ -16,7 +16,6 @@ Checks, on a real roscore with real pseudo-terminals:
     the landmarks now enclose the robot), and the SLAM pose stays near the
     true pose.
 """
-import bisect
 import math
 import threading
 import time
@@ -31,20 +30,12 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 
-import genpy.dynamic
 from ekf_slam_tools.grids import ray_cast
-from ekf_slam_tools.se2 import compose, inverse, wrap, yaw_of
+from ekf_slam_tools.messages import decode
+from ekf_slam_tools.se2 import compose, interpolate, inverse, wrap, yaw_of
+from ekf_slam_tools.terminal import wait_for
 
 EXPECTED_BEAMS = 181  # 180 deg at 1 deg (config/lms200.yaml)
-
-
-def wait_for(condition, timeout, period=0.05):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if condition():
-            return True
-        time.sleep(period)
-    return condition()
 
 
 class Listener:
@@ -100,10 +91,7 @@ class Listener:
                     self.slam = {kv.key: kv.value for kv in status.values}
 
     def on_static(self, raw):
-        header = raw._connection_header
-        types = genpy.dynamic.generate_dynamic(header["type"], header["message_definition"])
-        message = types[header["type"]]().deserialize(raw._buff)
-        for transform in message.transforms:
+        for transform in decode(raw).transforms:
             self.static[(transform.header.frame_id, transform.child_frame_id)] = transform
 
     def counter(self, key):
@@ -114,14 +102,8 @@ class Listener:
     def truth_at(self, stamp):
         """World pose at `stamp`, interpolated; None outside the history."""
         with self.lock:
-            times = [t for t, _ in self.truth]
-            i = bisect.bisect_left(times, stamp)
-            if i == 0 or i >= len(times):
-                return None
-            (t0, p0), (t1, p1) = self.truth[i - 1], self.truth[i]
-        f = (stamp - t0) / (t1 - t0) if t1 > t0 else 0.0
-        return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]),
-                wrap(p0[2] + f * wrap(p1[2] - p0[2])))
+            track = [(t,) + tuple(pose) for t, pose in self.truth]
+        return interpolate(track, stamp)
 
 
 class SimRearLaserTest(unittest.TestCase):
