@@ -26,7 +26,7 @@ from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool
 
-from ekf_slam_tools.grids import clearance, ray_cast
+from ekf_slam_tools.grids import clearance, range_errors
 from ekf_slam_tools.messages import decode
 from ekf_slam_tools.se2 import compose, interpolate, wrap, yaw_of
 
@@ -191,16 +191,8 @@ class SimDriversTest(unittest.TestCase):
             if truth is None:
                 continue
             laser = compose(between(self.start, truth), (LASER_X, 0.0, 0.0))
-            errors = []
-            for i, measured in enumerate(scan.ranges):
-                if not math.isfinite(measured) or measured >= scan.range_max:
-                    continue
-                angle = laser[2] + scan.angle_min + i * scan.angle_increment
-                expected = ray_cast(grid, laser, angle, 8.0)
-                if math.isfinite(expected) and expected < 7.5:
-                    errors.append(abs(measured - expected))
+            errors = range_errors(grid, laser, scan)
             self.assertGreater(len(errors), 100, "most beams hit something in this room")
-            errors.sort()
             median, p90 = errors[len(errors) // 2], errors[int(0.9 * len(errors))]
             rospy.loginfo("scan vs ray cast from the truth: median %.3f m, 90%% %.3f m, %d beams",
                           median, p90, len(errors))

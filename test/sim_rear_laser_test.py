@@ -30,7 +30,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 
-from ekf_slam_tools.grids import ray_cast
+from ekf_slam_tools.grids import range_errors
 from ekf_slam_tools.messages import decode
 from ekf_slam_tools.se2 import compose, interpolate, inverse, wrap, yaw_of
 from ekf_slam_tools.terminal import wait_for
@@ -160,16 +160,8 @@ class SimRearLaserTest(unittest.TestCase):
             if truth is None:
                 continue
             laser = compose(compose(inverse(start), truth), mount)
-            errors = []
-            for i, measured in enumerate(scan.ranges):
-                if not math.isfinite(measured) or measured >= scan.range_max:
-                    continue
-                angle = laser[2] + scan.angle_min + i * scan.angle_increment
-                expected = ray_cast(grid, laser, angle, 8.0)
-                if math.isfinite(expected) and expected < 7.5:
-                    errors.append(abs(measured - expected))
+            errors = range_errors(grid, laser, scan)
             self.assertGreater(len(errors), 100, "most rear beams hit something in this room")
-            errors.sort()
             median, p90 = errors[len(errors) // 2], errors[int(0.9 * len(errors))]
             rospy.loginfo("rear scan vs ray cast from the truth: median %.3f m, 90%% %.3f m",
                           median, p90)

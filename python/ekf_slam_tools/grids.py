@@ -44,3 +44,20 @@ def clearance(grid, point, search):
             dy = gy - min(max(gy, iy * res), (iy + 1) * res)
             nearest = min(nearest, math.hypot(dx, dy))
     return nearest
+
+
+def range_errors(grid, laser, scan, max_range=8.0, reach=7.5):
+    """|measured - expected| of each return of a LaserScan taken from the
+    pose `laser` (x, y, yaw in the grid's frame), the expected ranges ray
+    cast in `grid` up to max_range; beams whose wall lies beyond `reach` are
+    left out. Sorted ascending."""
+    errors = []
+    for i, measured in enumerate(scan.ranges):
+        if not math.isfinite(measured) or measured >= scan.range_max:
+            continue
+        angle = laser[2] + scan.angle_min + i * scan.angle_increment
+        expected = ray_cast(grid, laser, angle, max_range)
+        if math.isfinite(expected) and expected < reach:
+            errors.append(abs(measured - expected))
+    errors.sort()
+    return errors
