@@ -157,6 +157,11 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
   adjacency_[index].emplace_back(previous, distance);
 
   if (!options_.enabled) return;
+  searchLoops(index);
+  releaseIfPlaceIsFull(index);
+}
+
+void LoopCloser::searchLoops(int index) {
   if (hypothesis_) {
     if (tryConfirm(index) || hypothesis_) return;  // confirmed, or still waiting
   }
@@ -181,6 +186,25 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
   if (!candidates.empty()) next_attempt_ = index + options_.retry_interval;
 }
 
+void LoopCloser::releaseIfPlaceIsFull(int key) {
+  // While a wide-window loop awaits confirmation the new key scan's pose is
+  // the drifted one: its place is not known yet.
+  if (options_.max_keyscans_per_place <= 0 || hypothesis_) return;
+  const Pose2& here = graph_.pose(key);
+  int held = 0;
+  for (int j = 0; j < key && held < options_.max_keyscans_per_place; ++j) {
+    const Pose2& there = graph_.pose(j);
+    if (hasReadings(j) && std::hypot(there.x - here.x, there.y - here.y) <= options_.place_radius &&
+        std::abs(wrapAngle(there.theta - here.theta)) <= options_.place_angle) {
+      ++held;
+    }
+  }
+  if (held < options_.max_keyscans_per_place) return;
+  keys_[key].points = std::make_shared<const std::vector<Vector2>>();
+  keys_[key].sparse = std::vector<Vector2>();
+  ++counters_.released;
+}
+
 bool LoopCloser::tryConfirm(int key) {
   const Hypothesis h = *hypothesis_;
   if (key - h.to > options_.confirm_keys) {
@@ -196,7 +220,7 @@ bool LoopCloser::tryConfirm(int key) {
   int nearest = -1;
   double best = std::numeric_limits<double>::infinity();
   for (int j = 0; j < key; ++j) {
-    if (distance[j] < options_.min_loop_travel) continue;
+    if (distance[j] < options_.min_loop_travel || !hasReadings(j)) continue;
     const double d = std::hypot(graph_.pose(j).x - predicted.x, graph_.pose(j).y - predicted.y);
     if (d < best) {
       best = d;
@@ -303,7 +327,7 @@ std::vector<int> LoopCloser::pickCandidates(int key, const std::vector<double>& 
   // Ratio of the distance to the window: a near, well-known place first.
   std::vector<std::pair<double, int>> ranked;
   for (int j = 0; j < key; ++j) {
-    if (distance[j] < options_.min_loop_travel) continue;
+    if (distance[j] < options_.min_loop_travel || !hasReadings(j)) continue;
     const Pose2& there = graph_.pose(j);
     if (std::abs(wrapAngle(there.theta - here.theta)) > options_.max_heading_difference) continue;
     const double ratio = std::hypot(there.x - here.x, there.y - here.y) / searchRadius(distance[j]);

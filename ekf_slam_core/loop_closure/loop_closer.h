@@ -76,6 +76,16 @@ struct LoopClosureOptions {
   int submap_half_width = 5;            // key scans each side of the candidate in its submap
   int query_keys = 0;      // recent key scans merged into the query (0: the key scan alone)
   int retry_interval = 3;  // key scans to wait after a refused candidate
+  // Memory over long runs. A key scan taken where max_keyscans_per_place
+  // earlier key scans that hold readings already lie (within place_radius
+  // and place_angle of its pose, after the loop search it triggered) keeps
+  // its graph node but lets its readings go: a robot that drives the same
+  // corridors for hours keeps the building's views, not every pass (one
+  // pass puts about 3 key scans in a place at 0.4 m spacing). Key scans
+  // without readings are never loop candidates (0: keep every one).
+  int max_keyscans_per_place = 8;
+  double place_radius = 1.0;  // m
+  double place_angle = 0.5;   // rad (29 deg): the LMS200 sees the forward half
   // Confirmation. A loop found in a window wider than confirm_radius (the
   // graph cannot yet tell a true match from a look-alike place) is held as
   // a hypothesis. Each following key scan is then matched, in the smallest
@@ -137,6 +147,10 @@ struct LoopClosureOptions {
     v.integer("submap_half_width", submap_half_width, Bounds::closed(0, 1000, "key scans"));
     v.integer("query_keys", query_keys, Bounds::closed(0, 1000, "key scans"));
     v.integer("retry_interval", retry_interval, Bounds::closed(0, 100000, "key scans"));
+    v.integer("max_keyscans_per_place", max_keyscans_per_place,
+              Bounds::closed(0, 100000, "key scans"));
+    v.number("place_radius", place_radius, Bounds::openClosed(0.0, 1000.0, "m"));
+    v.number("place_angle", place_angle, Bounds::openClosed(0.0, kPi, "rad"));
     v.number("confirm_radius", confirm_radius, Bounds::openClosed(0.0, 1e9, "m"));
     v.integer("confirm_keys", confirm_keys, Bounds::closed(1, 100000, "key scans"));
     v.section("correlative", correlative);
@@ -167,6 +181,7 @@ struct LoopClosureCounters {
   long dropped = 0;       // loop edges the kernel rejected at the end
   long inconsistent = 0;  // loops refused by the consistency test (not in `accepted`)
   long unconfirmed = 0;   // wide-window hypotheses no later key scan confirmed
+  long released = 0;      // key scans whose readings were let go (max_keyscans_per_place)
   long optimisations = 0;
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;
@@ -225,7 +240,8 @@ class LoopCloser {
   // edges are the graph's robust edges; the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
   int keyCount() const { return static_cast<int>(keys_.size()); }
-  // A key scan's readings (≤ max_range, robot frame) and its scan's stamp.
+  // A key scan's readings (≤ max_range, robot frame; empty when released,
+  // max_keyscans_per_place) and its scan's stamp.
   const std::vector<Vector2>& keyPoints(int key) const { return *keys_[key].points; }
   // The same points, shared: they never change once the key scan is taken.
   std::shared_ptr<const std::vector<Vector2>> sharedKeyPoints(int key) const {
@@ -260,6 +276,13 @@ class LoopCloser {
   // `candidate`, searching ±radius, ±angle around `guess` (key in candidate's frame).
   bool verify(int candidate, int key, const Pose2& guess, double radius, double angle,
               Pose2* relative);
+  // The loop search for the new key scan `key`: a pending hypothesis's
+  // confirmation, else the candidates' verification.
+  void searchLoops(int key);
+  // Lets the readings of key scan `key` go when its place holds
+  // max_keyscans_per_place key scans with readings already.
+  void releaseIfPlaceIsFull(int key);
+  bool hasReadings(int key) const { return !keys_[key].points->empty(); }
   // A pending hypothesis: true when key scan `key` confirmed it (both loops entered).
   bool tryConfirm(int key);
   // Window half-widths for a relative pose over `graph_distance` of chain.

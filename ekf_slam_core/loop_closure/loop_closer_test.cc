@@ -40,17 +40,19 @@ std::vector<Vector2> pointsOf(const Scan& scan) {
   return scanPointsInRobotFrame(scan, Pose2(), ScanMatcherOptions());
 }
 
-// Two laps of a circle of radius 4.5 m around the hall's centre, 0.1 m apart.
-std::vector<Pose2> twoLaps() {
+// Laps of a circle of radius 4.5 m around the hall's centre, 0.1 m apart.
+std::vector<Pose2> laps(int count) {
   std::vector<Pose2> poses;
   const double radius = 4.5, step = 0.1;
   const int per_lap = static_cast<int>(2.0 * kPi * radius / step);
-  for (int i = 0; i <= 2 * per_lap; ++i) {
+  for (int i = 0; i <= count * per_lap; ++i) {
     const double a = 2.0 * kPi * i / per_lap;
     poses.emplace_back(radius * std::sin(a), -radius * std::cos(a), a);
   }
   return poses;
 }
+
+std::vector<Pose2> twoLaps() { return laps(2); }
 
 // A sweep taken at `pose`, its points placed in the world frame.
 std::vector<Vector2> placedSweep(const sim::PolygonWorld& world, const Pose2& pose,
@@ -224,6 +226,51 @@ TEST(LoopCloser, AScanHistoryBoundKeepsTheGraphAndTheNewestScanPoses) {
     EXPECT_TRUE(samePose(newest[i].pose, same.pose)) << "scan " << bounded.firstScan() + i;
     EXPECT_EQ(bounded.scanKey(bounded.firstScan() + i), full.scanKey(bounded.firstScan() + i));
   }
+}
+
+// Five laps with one key scan kept per place: a key scan whose place (1 m,
+// 29 deg) holds one with readings already lets its readings go, so the
+// readings kept stay below one lap's worth while the graph grows by a node
+// per key scan; loops keep closing against the first lap (released
+// key scans are never candidates) and the drifting front end stays pulled
+// back to the truth to the end.
+TEST(LoopCloser, KeyScansOfAFullPlaceLetTheirReadingsGoAndLoopsStillClose) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(11);
+  const std::vector<Pose2> truth = laps(5);
+  const size_t per_lap = truth.size() / 5;
+  LoopClosureOptions options;
+  options.max_keyscans_per_place = 1;
+  LoopCloser closer(options, ScanMatcherOptions());
+  Pose2 front_end = truth.front();
+  long accepted_after_two_laps = 0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (i > 0) {
+      const Pose2 step = between(truth[i - 1], truth[i]);
+      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
+    }
+    closer.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
+    if (i == 2 * per_lap) accepted_after_two_laps = closer.counters().accepted;
+  }
+  closer.finish();
+  int with_readings = 0, first_lap_keys = 0;
+  for (int k = 0; k < closer.keyCount(); ++k) {
+    with_readings += closer.keyPoints(k).empty() ? 0 : 1;
+    first_lap_keys += closer.keyScanIndex(k) <= static_cast<int>(per_lap) ? 1 : 0;
+  }
+  EXPECT_EQ(closer.counters().released, closer.keyCount() - with_readings);
+  EXPECT_GE(closer.keyCount(), 4 * first_lap_keys);
+  EXPECT_LT(with_readings, 1.5 * first_lap_keys) << closer.keyCount() << " key scans";
+  EXPECT_GT(closer.counters().accepted, accepted_after_two_laps + 3);  // laps 3 to 5 close too
+  const std::vector<StampedPose> closed = closer.scanPoses();
+  ASSERT_EQ(closed.size(), truth.size());
+  EXPECT_GT(positionError(front_end, truth.back()), 3.0);
+  EXPECT_LT(positionError(closed.back().pose, truth.back()), 0.15);
+  double worst = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    worst = std::max(worst, positionError(closed[i].pose, truth[i]));
+  }
+  EXPECT_LT(worst, 0.4);
 }
 
 TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {

@@ -49,6 +49,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     const LoopClosureCounters loops = pipeline_->backEndCounters();
     status.add("back-end backlog (scans)", pipeline_->backEndBacklog());
     status.add("key scans", loops.key_scans);
+    status.add("key scans without readings (place full)", loops.released);
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);
     status.add("loops refused as inconsistent", loops.inconsistent);

@@ -10,12 +10,14 @@ resident set (VmRSS) and the CPU time (utime + stime) of the last second.
 It also records the node's landmark count and path length from
 /diagnostics, so that memory can be set against what the map explains.
 
-Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed)
+Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed key_scans
+key_scans_without_readings; the last two 0 with loop closure off)
 and prints a summary: RSS after the warm-up and at the end.
 
 usage (after make build, with the workspace sourced):
   source .build/setup.bash
   tools/dev/live_soak.py --minutes 30 --out output/soak
+  tools/dev/live_soak.py --minutes 30 --out output/soak_p3dx --config config/ekf_slam_p3dx.yaml
 """
 import argparse
 import os
@@ -74,6 +76,11 @@ def main():
     parser.add_argument("--warmup-minutes", type=float, default=5.0)
     parser.add_argument("--out", default="output/soak")
     parser.add_argument("--port", type=int, default=11473)
+    parser.add_argument("--config", default="",
+                        help="SLAM parameters for sim.launch (default: its own, the "
+                             "simulator's config/ekf_slam_sim.yaml, loop closure off); "
+                             "config/ekf_slam_p3dx.yaml soaks the robot's configuration, "
+                             "scan matching and loop closure on")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     env = dict(os.environ, ROS_MASTER_URI="http://localhost:%d" % args.port)
@@ -85,7 +92,8 @@ def main():
         time.sleep(3.0)
         procs.append(subprocess.Popen(
             ["roslaunch", "ekf_slam", "sim.launch", "waypoints:=office_loop", "laps:=1000",
-             "link_dir:=/tmp/ekf_slam_soak"],
+             "link_dir:=/tmp/ekf_slam_soak"] +
+            (["config:=" + os.path.abspath(args.config)] if args.config else []),
             env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
         pid = find_node("ekf_slam_node", time.monotonic() + 60.0)
         if pid is None:
@@ -96,7 +104,8 @@ def main():
         path = os.path.join(args.out, "live_soak.txt")
         rows = []
         with open(path, "w") as out:
-            out.write("# t_s rss_kib cpu_percent landmarks scans_processed\n")
+            out.write("# t_s rss_kib cpu_percent landmarks scans_processed key_scans "
+                      "key_scans_without_readings\n")
             start = time.monotonic()
             last = sample(pid)
             last_t = start
@@ -112,17 +121,20 @@ def main():
                 last, last_t = current, now
                 values = diagnostics.values
                 row = (now - start, current[0], cpu, int(values.get("landmarks", "0") or 0),
-                       int(values.get("scans processed", "0") or 0))
+                       int(values.get("scans processed", "0") or 0),
+                       int(values.get("key scans", "0") or 0),
+                       int(values.get("key scans without readings (place full)", "0") or 0))
                 rows.append(row)
-                out.write("%.1f %d %.1f %d %d\n" % row)
+                out.write("%.1f %d %.1f %d %d %d %d\n" % row)
                 out.flush()
         warm = [r for r in rows if r[0] >= args.warmup_minutes * 60.0]
         if not warm:
             print("live_soak: shorter than the warm-up; nothing to compare", file=sys.stderr)
             return 1
         cpu_mean = sum(r[2] for r in rows) / len(rows)
-        print("live soak: %.1f min, %d scans processed, %d landmarks at the end" %
-              (rows[-1][0] / 60.0, rows[-1][4], rows[-1][3]))
+        print("live soak: %.1f min, %d scans processed, %d landmarks at the end, "
+              "%d key scans (%d without readings)" %
+              (rows[-1][0] / 60.0, rows[-1][4], rows[-1][3], rows[-1][5], rows[-1][6]))
         print("RSS %d KiB after the %.0f min warm-up, %d KiB at the end (max %d KiB); "
               "CPU %.1f %% mean" % (warm[0][1], args.warmup_minutes, rows[-1][1],
                                      max(r[1] for r in warm), cpu_mean))
