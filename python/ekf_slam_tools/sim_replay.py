@@ -55,16 +55,26 @@ def read_trajectory(path):
     return rows
 
 
-def mean_position_error(rows, truth):
-    """Mean distance to the truth, with the map frame tied to the truth at
-    the trajectory's first pose."""
+def position_errors(rows, truth):
+    """Each pose's distance to the truth (interpolated at its stamp), with
+    the map frame tied to the truth at the trajectory's first pose; poses
+    outside the truth's time span are left out. Also the last pose's
+    heading error (rad)."""
     rows = [r for r in rows if se2.interpolate(truth, r[0]) is not None]
+    if not rows:
+        return [], 0.0
     world_map = se2.compose(se2.interpolate(truth, rows[0][0]), se2.inverse(rows[0][1:4]))
     errors = []
     for r in rows:
         est = se2.compose(world_map, r[1:4])
         true = se2.interpolate(truth, r[0])
         errors.append(math.hypot(est[0] - true[0], est[1] - true[1]))
+    return errors, se2.wrap(est[2] - true[2])
+
+
+def mean_position_error(rows, truth):
+    """Mean distance to the truth (position_errors) and the poses scored."""
+    errors, _ = position_errors(rows, truth)
     return sum(errors) / len(errors), len(errors)
 
 

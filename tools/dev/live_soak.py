@@ -17,7 +17,7 @@ and prints a summary: RSS after the warm-up and at the end.
 usage (after make build, with the workspace sourced):
   source .build/setup.bash
   tools/dev/live_soak.py --minutes 30 --out output/soak
-  tools/dev/live_soak.py --minutes 30 --out output/soak_p3dx --config config/ekf_slam_p3dx.yaml
+  tools/dev/live_soak.py --minutes 30 --out output/soak_loops --loop-closure
 """
 import argparse
 import os
@@ -70,6 +70,24 @@ class Diagnostics:
                 self.values = {kv.key: kv.value for kv in status.values}
 
 
+def loop_closure_config(args):
+    """OUT/soak_config.yaml: --config (default the simulator's) with
+    loop_closure.enabled set."""
+    import rospkg
+    import yaml
+    source = args.config or os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config",
+                                         "ekf_slam_sim.yaml")
+    with open(source) as f:
+        config = yaml.safe_load(f)
+    config.setdefault("loop_closure", {})["enabled"] = True
+    path = os.path.join(args.out, "soak_config.yaml")
+    with open(path, "w") as f:
+        f.write("# %s with loop_closure.enabled: true (tools/dev/live_soak.py --loop-closure)\n"
+                % source)
+        yaml.safe_dump(config, f, default_flow_style=False)
+    return path
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--minutes", type=float, default=30.0)
@@ -81,8 +99,14 @@ def main():
                              "simulator's config/ekf_slam_sim.yaml, loop closure off); "
                              "config/ekf_slam_p3dx.yaml soaks the robot's configuration, "
                              "scan matching and loop closure on")
+    parser.add_argument("--loop-closure", action="store_true",
+                        help="the simulator's configuration with the loop-closing back end "
+                             "on (written to OUT/soak_config.yaml): its key scans are what "
+                             "grows with the distance driven")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.loop_closure:
+        args.config = loop_closure_config(args)
     env = dict(os.environ, ROS_MASTER_URI="http://localhost:%d" % args.port)
     os.environ.update(env)
     log = open(os.path.join(args.out, "live_soak_roslaunch.log"), "w")
