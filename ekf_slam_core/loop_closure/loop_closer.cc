@@ -83,6 +83,23 @@ Matrix3 icpCovariance(const std::vector<Vector2>& points, const PointCloudRefere
 
 }  // namespace
 
+double explainedStructure(const std::vector<Vector2>& query, const PointCloudReference& reference,
+                          const Pose2& pose, const Vector2& direction,
+                          const ScanMatcherOptions& options) {
+  const PointCloudReference own(query, options.normal_radius, options.correspondence_distance);
+  const Matrix2 R = pose.rotation();
+  double all = 0.0, explained = 0.0;
+  for (size_t i = 0; i < own.size(); ++i) {
+    const double along = (R * own.normals()[i]).dot(direction);
+    all += along * along;
+    if (reference.nearest(transformFrom(pose, own.points()[i]), options.correspondence_distance) >=
+        0) {
+      explained += along * along;
+    }
+  }
+  return all < 1.0 ? 1.0 : explained / all;
+}
+
 LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
                        long scan_history)
     : options_(options), icp_(matcher), scan_history_(std::max(0L, scan_history)) {
@@ -397,6 +414,15 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   const Matrix3 covariance = icpCovariance(query, reference, fine.pose, icp_);
   const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
   if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) return false;
+  // Where the query itself has structure along the weakest direction (a
+  // wall across a corridor), the match must explain it there too, not only
+  // on average: a view down one corridor matched onto a view along another
+  // shares only the walls parallel to both, and a door frame or two would
+  // pass the test above.
+  if (explainedStructure(query, reference, fine.pose, eigen.eigenvectors().col(1), icp_) <
+      options_.min_directional_inlier_fraction) {
+    return false;
+  }
   *relative = fine.pose;
   return true;
 }

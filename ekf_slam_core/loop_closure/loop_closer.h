@@ -21,8 +21,10 @@
 //   whole window and any heading it allows against a submap of the
 //   candidate and its neighbours, then refined by point-to-line ICP. A loop
 //   is accepted only when the correlative score, the ICP inlier fraction and
-//   the residual are strong and the match constrains every direction (no
-//   sliding along a corridor).
+//   the residual are strong, the match constrains every direction (no
+//   sliding along a corridor), and along its weakest direction it explains
+//   the query's own structure there (a view down one corridor, whose end
+//   wall the old view never saw, is not taken for a view along another).
 // - Optimisation after each accepted loop; the loop edges carry a Cauchy
 //   kernel. A new loop enters at full weight (the scan evidence passed),
 //   and is judged by the kernel against the later ones; at the end loops
@@ -101,7 +103,11 @@ struct LoopClosureOptions {
   double min_inlier_fraction = 0.7;    // of the key scan's points paired by ICP
   double max_rms_residual = 0.04;      // m, ICP point-to-line
   double max_degenerate_sigma = 0.03;  // m: 1-sigma of the match along its weakest direction
-  double max_icp_shift = 0.3;          // m: ICP may move the correlative result this far
+  // Of the query's own structure along that weakest direction (its points
+  // weighted by the square of their normal's component along it), the share
+  // the match pairs with the submap.
+  double min_directional_inlier_fraction = 0.5;
+  double max_icp_shift = 0.3;  // m: ICP may move the correlative result this far
   // Loop edge noise (1 sigma) and optimisation:
   double loop_sigma_translation = 0.05;  // m
   double loop_sigma_rotation = 0.01;     // rad
@@ -159,6 +165,8 @@ struct LoopClosureOptions {
     v.number("min_inlier_fraction", min_inlier_fraction, Bounds::closed(0.0, 1.0));
     v.number("max_rms_residual", max_rms_residual, Bounds::openClosed(0.0, 10.0, "m"));
     v.number("max_degenerate_sigma", max_degenerate_sigma, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("min_directional_inlier_fraction", min_directional_inlier_fraction,
+             Bounds::closed(0.0, 1.0));
     v.number("max_icp_shift", max_icp_shift, Bounds::openClosed(0.0, 100.0, "m"));
     v.number("loop_sigma_translation", loop_sigma_translation, Bounds::openClosed(0.0, 100.0, "m"));
     v.number("loop_sigma_rotation", loop_sigma_rotation, Bounds::openClosed(0.0, kPi, "rad"));
@@ -186,6 +194,17 @@ struct LoopClosureCounters {
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;
 };
+
+// The share of `query`'s own structure along `direction` (a unit vector in
+// the reference frame) that a match at `pose` explains: each query point
+// with a normal (fitted from the query's own neighbours, options'
+// normal_radius) weighs (n · direction)², and counts as explained when a
+// reference point lies within options' correspondence_distance of it at
+// `pose`. 1 when the query holds less than one point's worth of structure
+// along the direction (nothing there to explain).
+double explainedStructure(const std::vector<Vector2>& query, const PointCloudReference& reference,
+                          const Pose2& pose, const Vector2& direction,
+                          const ScanMatcherOptions& options);
 
 class LoopCloser {
  public:

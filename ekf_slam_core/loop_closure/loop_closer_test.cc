@@ -273,6 +273,43 @@ TEST(LoopCloser, KeyScansOfAFullPlaceLetTheirReadingsGoAndLoopsStillClose) {
   EXPECT_LT(worst, 0.4);
 }
 
+std::vector<Vector2> segment(const Vector2& a, const Vector2& b, int count) {
+  std::vector<Vector2> points;
+  for (int i = 0; i <= count; ++i) points.push_back(a + (b - a) * (static_cast<double>(i) / count));
+  return points;
+}
+
+// A view down a corridor, its end wall included, matched onto an old view
+// that saw only the corridor's side walls (a false loop found on the
+// simulated office): along the corridor the query's structure is the end
+// wall, which nothing in the reference explains, so the share is 0 there
+// and 1 across the corridor. With the end wall in the reference it is all
+// explained; a query without structure along the corridor has nothing to
+// explain. The same in a query frame turned and moved against the reference.
+TEST(ExplainedStructure, AWallAcrossTheCorridorMustBeInTheReference) {
+  const ScanMatcherOptions options;
+  std::vector<Vector2> sides = segment({0.0, -1.0}, {6.0, -1.0}, 120);
+  const std::vector<Vector2> north = segment({0.0, 1.0}, {6.0, 1.0}, 120);
+  sides.insert(sides.end(), north.begin(), north.end());
+  std::vector<Vector2> with_end = sides;
+  const std::vector<Vector2> end = segment({6.3, -0.8}, {6.3, 0.8}, 32);
+  with_end.insert(with_end.end(), end.begin(), end.end());
+  const PointCloudReference side_walls(sides, options.normal_radius,
+                                       options.correspondence_distance);
+  const PointCloudReference every_wall(with_end, options.normal_radius,
+                                       options.correspondence_distance);
+  const Vector2 along(1.0, 0.0), across(0.0, 1.0);
+  for (const Pose2& pose : {Pose2(), Pose2(1.0, 0.5, 0.3)}) {
+    std::vector<Vector2> query, query_sides;
+    for (const Vector2& p : with_end) query.push_back(transformTo(pose, p));
+    for (const Vector2& p : sides) query_sides.push_back(transformTo(pose, p));
+    EXPECT_LT(explainedStructure(query, side_walls, pose, along, options), 0.05);
+    EXPECT_GT(explainedStructure(query, side_walls, pose, across, options), 0.95);
+    EXPECT_GT(explainedStructure(query, every_wall, pose, along, options), 0.95);
+    EXPECT_EQ(explainedStructure(query_sides, side_walls, pose, along, options), 1.0);
+  }
+}
+
 TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {
   const LoopRun run = runTwoLaps(/*enabled=*/true);
   ASSERT_EQ(run.closed.size(), run.truth.size());
