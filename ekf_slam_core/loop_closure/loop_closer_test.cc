@@ -135,6 +135,12 @@ TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
   EXPECT_LT(maxAbsDifference(a.pose, b.pose), 1e-9);
 }
 
+// The front end's next pose: the true step from `from` to `to` (0.1 m),
+// turned 0.4 deg too far per metre.
+Pose2 driftedStep(const Pose2& front_end, const Pose2& from, const Pose2& to) {
+  return compose(front_end, compose(between(from, to), Pose2(0, 0, degToRad(0.4) * 0.1)));
+}
+
 struct LoopRun {
   std::vector<Pose2> truth, front_end, closed;
   std::vector<Pose2> causal;      // latestPose() right after each scan
@@ -156,10 +162,7 @@ LoopRun runTwoLaps(bool enabled, int false_loops = 0) {
   LoopCloser closer(options, ScanMatcherOptions());
   Pose2 front_end = run.truth.front();
   for (size_t i = 0; i < run.truth.size(); ++i) {
-    if (i > 0) {
-      const Pose2 step = between(run.truth[i - 1], run.truth[i]);
-      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
-    }
+    if (i > 0) front_end = driftedStep(front_end, run.truth[i - 1], run.truth[i]);
     run.front_end.push_back(front_end);
     closer.addScan(0.1 * i, sweep(world, run.truth[i], &rng), Pose2(), front_end, true);
     const size_t second_lap = run.truth.size() / 2;
@@ -197,10 +200,7 @@ TEST(LoopCloser, AScanHistoryBoundKeepsTheGraphAndTheNewestScanPoses) {
   Pose2 front_end = truth.front();
   int most_entries = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
-    if (i > 0) {
-      const Pose2 step = between(truth[i - 1], truth[i]);
-      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
-    }
+    if (i > 0) front_end = driftedStep(front_end, truth[i - 1], truth[i]);
     const Scan scan = sweep(world, truth[i], &rng);
     full.addScan(0.1 * i, scan, Pose2(), front_end, true);
     bounded.addScan(0.1 * i, scan, Pose2(), front_end, true);
@@ -245,10 +245,7 @@ TEST(LoopCloser, KeyScansOfAFullPlaceLetTheirReadingsGoAndLoopsStillClose) {
   Pose2 front_end = truth.front();
   long accepted_after_two_laps = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
-    if (i > 0) {
-      const Pose2 step = between(truth[i - 1], truth[i]);
-      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
-    }
+    if (i > 0) front_end = driftedStep(front_end, truth[i - 1], truth[i]);
     closer.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
     if (i == 2 * per_lap) accepted_after_two_laps = closer.counters().accepted;
   }
@@ -387,10 +384,7 @@ BackEndRun runTwoLapsThroughBackEnd(bool own_thread, int delay) {
   BackEndRun run;
   Pose2 front_end = truth.front();
   for (size_t i = 0; i < truth.size(); ++i) {
-    if (i > 0) {
-      const Pose2 step = between(truth[i - 1], truth[i]);
-      front_end = compose(front_end, compose(step, Pose2(0, 0, degToRad(0.4) * 0.1)));
-    }
+    if (i > 0) front_end = driftedStep(front_end, truth[i - 1], truth[i]);
     const std::shared_ptr<const BackEndView> view =
         back_end.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
     run.causal.push_back(view->poseOf(front_end));
