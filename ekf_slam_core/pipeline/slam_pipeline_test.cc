@@ -354,6 +354,17 @@ TEST(SlamPipeline, AnInitialPoseMovesTheWholeEstimateRigidly) {
 // One and a half laps around the island of the carton room with drifting
 // odometry, through the whole pipeline (scan matching, filter, back end):
 // the causal pose of every scan and the filtered one.
+// The carton room's drives: scan matching and the back end on together (or
+// both off), loops after 6 m of travel, corrections `correction_delay`
+// scans after the scan that triggered them.
+PipelineOptions cartonLoopOptions(const Pose2& laser, bool loop_closure, int correction_delay) {
+  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/loop_closure);
+  options.loop_closure.enabled = loop_closure;
+  options.loop_closure.min_loop_travel = 6.0;
+  options.loop_closure.correction_delay = correction_delay;
+  return options;
+}
+
 struct IslandRun {
   std::vector<StampedPose> causal, filtered;
   long loops = 0, reanchors = 0;
@@ -363,10 +374,7 @@ IslandRun driveAroundTheIsland(bool back_end_thread, int correction_delay) {
   const sim::PolygonWorld world = cartonRoom();
   const Pose2 laser(0.1, 0.0, 0.0);
   std::mt19937 rng(5);
-  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/true);
-  options.loop_closure.enabled = true;
-  options.loop_closure.min_loop_travel = 6.0;
-  options.loop_closure.correction_delay = correction_delay;
+  PipelineOptions options = cartonLoopOptions(laser, /*loop_closure=*/true, correction_delay);
   options.back_end_thread = back_end_thread;
   SlamPipeline pipeline(options);
   const double radius = 2.3, step = 0.08;
@@ -623,10 +631,7 @@ HistoryRun driveWithBoundedHistory(bool loop_closure, long history) {
   const sim::PolygonWorld world = cartonRoom();
   const Pose2 laser(0.1, 0.0, 0.0);
   std::mt19937 rng(7);
-  PipelineOptions options = defaultOptions(laser, /*scan_matching=*/loop_closure);
-  options.loop_closure.enabled = loop_closure;
-  options.loop_closure.min_loop_travel = 6.0;
-  options.loop_closure.correction_delay = 0;
+  PipelineOptions options = cartonLoopOptions(laser, loop_closure, /*correction_delay=*/0);
   PipelineOptions bounded_options = options;
   bounded_options.history_scans = history;
   EXPECT_EQ(bounded_options.validate(), "");

@@ -169,17 +169,26 @@ void expectSolvedToTheTruth(LandmarkGraph graph, const SmallWorld& truth, double
   }
 }
 
-TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
-  const SmallWorld truth;
+// The small world's exact measurements, and its poses with the second one
+// moved off the truth: the start of the solves below.
+struct ExactProblem {
+  SmallWorld truth;
   std::vector<Pose2> motion;
   std::vector<RangeBearing> z;
-  ASSERT_TRUE(exactMeasurements(truth, &motion, &z));
-  std::vector<Pose2> poses = truth.poses;
-  poses[1] = Pose2(1.2, -0.1, 0.1);
-  poses[2] = Pose2(1.7, 0.7, 0.7);
+  std::vector<Pose2> poses;
+  bool measured = false;
+  ExactProblem() : poses(truth.poses), measured(exactMeasurements(truth, &motion, &z)) {
+    poses[1] = Pose2(1.2, -0.1, 0.1);
+  }
+};
+
+TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
+  ExactProblem p;
+  ASSERT_TRUE(p.measured);
+  p.poses[2] = Pose2(1.7, 0.7, 0.7);
   std::vector<Vector2> landmarks = {Vector2(1.0, 2.5), Vector2(3.4, -0.6)};
-  expectSolvedToTheTruth(buildGraph(truth, motion, z, poses, landmarks), truth, 1e-16, 1e-8,
-                         /*symbolic_analyses=*/1);
+  expectSolvedToTheTruth(buildGraph(p.truth, p.motion, p.z, p.poses, landmarks), p.truth, 1e-16,
+                         1e-8, /*symbolic_analyses=*/1);
 }
 
 // A landmark that starts on a laser has no observation error from that
@@ -187,17 +196,13 @@ TEST(LandmarkGraph, RecoversTheTruthFromExactMeasurements) {
 // the landmark has moved, which changes the pattern of H. The solver must
 // notice (a new pattern, analysed afresh) and still find the truth.
 TEST(LandmarkGraph, AnEdgeThatEntersLaterChangesThePatternAndIsSolved) {
-  const SmallWorld truth;
-  std::vector<Pose2> motion;
-  std::vector<RangeBearing> z;
-  ASSERT_TRUE(exactMeasurements(truth, &motion, &z));
-  std::vector<Pose2> poses = truth.poses;
-  poses[1] = Pose2(1.2, -0.1, 0.1);
-  std::vector<Vector2> landmarks = {compose(poses[1], kLaser).translation(), Vector2(3.4, -0.6)};
+  const ExactProblem p;
+  ASSERT_TRUE(p.measured);
+  std::vector<Vector2> landmarks = {compose(p.poses[1], kLaser).translation(), Vector2(3.4, -0.6)};
   Vector2 e;
-  ASSERT_FALSE(observationError(poses[1], kLaser, landmarks[0], z[2], &e));
-  expectSolvedToTheTruth(buildGraph(truth, motion, z, poses, landmarks), truth, 1e-12, 1e-6,
-                         /*symbolic_analyses=*/2);
+  ASSERT_FALSE(observationError(p.poses[1], kLaser, landmarks[0], p.z[2], &e));
+  expectSolvedToTheTruth(buildGraph(p.truth, p.motion, p.z, p.poses, landmarks), p.truth, 1e-12,
+                         1e-6, /*symbolic_analyses=*/2);
 }
 
 // Noisy measurements: the sparse LM optimum must be the stationary point of
