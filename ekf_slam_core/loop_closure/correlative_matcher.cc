@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace ekf_slam {
 
@@ -93,6 +94,23 @@ class Search {
          int i_max, int j_max, double inv_count)
       : grid_(grid), cells_(cells), i_max_(i_max), j_max_(j_max), inv_count_(inv_count) {}
 
+  // Translations within `radius` cells of offset (i, j) are left out of
+  // the search (every rotation): the runner-up search.
+  void exclude(int i, int j, double radius) {
+    excluded_ = true;
+    ex_i_ = i;
+    ex_j_ = j;
+    ex_r2_ = radius * radius;
+  }
+  // Every translation of the block (size × size offsets from c) excluded.
+  bool excluded(const Candidate& c, int size) const {
+    if (!excluded_) return false;
+    // The block's farthest corner from the excluded centre.
+    const double di = std::max(std::abs(c.i - ex_i_), std::abs(c.i + size - 1 - ex_i_));
+    const double dj = std::max(std::abs(c.j - ex_j_), std::abs(c.j + size - 1 - ex_j_));
+    return di * di + dj * dj <= ex_r2_;
+  }
+
   double score(int level, const Candidate& c) const {
     double sum = 0.0;
     for (const auto& [ix, iy] : cells_[c.rotation]) sum += grid_.value(level, ix + c.i, iy + c.j);
@@ -101,6 +119,7 @@ class Search {
 
   // Depth first into a block of `level` whose bound beats the best so far.
   void descend(int level, const Candidate& block, Candidate* best) const {
+    if (excluded(block, 1 << level)) return;
     if (level == 0) {
       if (block.score > best->score) *best = block;
       return;
@@ -133,13 +152,21 @@ class Search {
   const std::vector<std::vector<std::pair<int, int>>>& cells_;
   int i_max_, j_max_;
   double inv_count_;
+  bool excluded_ = false;
+  int ex_i_ = 0, ex_j_ = 0;
+  double ex_r2_ = 0.0;
 };
 
 }  // namespace
 
-CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const LikelihoodGrid& grid,
-                                    const Pose2& guess, double linear_window, double angular_window,
-                                    const CorrelativeMatcherOptions& options, double min_score) {
+namespace {
+
+// The search of both entry points; with `exclusion`, translations within
+// `exclusion_radius` of its position are not searched.
+CorrelativeResult searchWindow(const std::vector<Vector2>& points, const LikelihoodGrid& grid,
+                               const Pose2& guess, double linear_window, double angular_window,
+                               const CorrelativeMatcherOptions& options, double min_score,
+                               const Pose2* exclusion, double exclusion_radius) {
   CorrelativeResult result;
   result.pose = guess;
   if (points.empty() || grid.empty()) return result;
@@ -175,7 +202,12 @@ CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const Li
       cells[r].emplace_back(ix, iy);
     }
   }
-  const Search search(grid, cells, i_max, j_max, 1.0 / count);
+  Search search(grid, cells, i_max, j_max, 1.0 / count);
+  if (exclusion != nullptr) {
+    search.exclude(static_cast<int>(std::lround((exclusion->x - guess.x) / res)),
+                   static_cast<int>(std::lround((exclusion->y - guess.y) / res)),
+                   exclusion_radius / res);
+  }
   const int top = grid.levels() - 1;
   const int step = 1 << top;
   std::vector<Candidate> blocks;
@@ -183,6 +215,7 @@ CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const Li
     for (int i = i_min; i <= i_max; i += step) {
       for (int j = j_min; j <= j_max; j += step) {
         Candidate c{0.0, r, i, j};
+        if (search.excluded(c, step)) continue;
         c.score = search.score(top, c);
         if (c.score > min_score) blocks.push_back(c);
       }
@@ -201,6 +234,24 @@ CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const Li
   result.pose = Pose2(guess.x + best.i * res, guess.y + best.j * res,
                       wrapAngle(guess.theta + (best.rotation - m) * options.angular_step));
   return result;
+}
+
+}  // namespace
+
+CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const LikelihoodGrid& grid,
+                                    const Pose2& guess, double linear_window, double angular_window,
+                                    const CorrelativeMatcherOptions& options, double min_score) {
+  return searchWindow(points, grid, guess, linear_window, angular_window, options, min_score,
+                      nullptr, 0.0);
+}
+
+CorrelativeResult correlativeRunnerUp(const std::vector<Vector2>& points,
+                                      const LikelihoodGrid& grid, const Pose2& guess,
+                                      double linear_window, double angular_window,
+                                      const CorrelativeMatcherOptions& options, const Pose2& best,
+                                      double distinct_radius, double min_score) {
+  return searchWindow(points, grid, guess, linear_window, angular_window, options, min_score, &best,
+                      distinct_radius);
 }
 
 }  // namespace ekf_slam

@@ -99,4 +99,16 @@ CorrelativeResult correlativeSearch(const std::vector<Vector2>& points, const Li
                                     const CorrelativeMatcherOptions& options,
                                     double min_score = 0.0);
 
+// The same search with the translations within distinct_radius of `best`
+// left out (at every heading): the best pose of the window at another
+// place. A place whose runner-up scores nearly as well as its best is
+// ambiguous (a corridor whose doors repeat, two rooms alike): Olson's
+// uniqueness test for loop closures. Score 0 when no pose there beats
+// min_score.
+CorrelativeResult correlativeRunnerUp(const std::vector<Vector2>& points,
+                                      const LikelihoodGrid& grid, const Pose2& guess,
+                                      double linear_window, double angular_window,
+                                      const CorrelativeMatcherOptions& options, const Pose2& best,
+                                      double distinct_radius, double min_score);
+
 }  // namespace ekf_slam

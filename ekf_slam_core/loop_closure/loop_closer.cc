@@ -423,6 +423,17 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
       options_.min_directional_inlier_fraction) {
     return false;
   }
+  // Last, as the dearest: no other place of the window may match nearly as
+  // well (the search above returns only the best pose).
+  if (options_.max_runner_up_ratio < 1.0) {
+    const CorrelativeResult rival = correlativeRunnerUp(
+        queryPoints(key, true), grid, guess, radius, angle, options_.correlative, coarse.pose,
+        options_.distinct_radius, options_.max_runner_up_ratio * coarse.score);
+    if (rival.score > 0.0) {
+      ++counters_.ambiguous;
+      return false;
+    }
+  }
   *relative = fine.pose;
   return true;
 }

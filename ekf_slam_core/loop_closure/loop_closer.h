@@ -74,10 +74,14 @@ struct LoopClosureOptions {
   double search_radius_max = 1000.0;    // m: window ceiling
   double search_angle_min = 0.1;        // rad, heading window floor
   double max_heading_difference = kPi;  // rad between the two key scans' estimated headings
-  int max_candidates = 1;               // places verified per key scan, most likely first
-  int submap_half_width = 5;            // key scans each side of the candidate in its submap
-  int query_keys = 0;      // recent key scans merged into the query (0: the key scan alone)
-  int retry_interval = 3;  // key scans to wait after a refused candidate
+  // Places verified per key scan, most likely first; the first that passes
+  // is taken. Once the drift exceeds the spacing of look-alike places the
+  // likeliest one is often not the right one, and the next ones are tried:
+  // the uniqueness test below keeps a look-alike from passing.
+  int max_candidates = 5;
+  int submap_half_width = 5;  // key scans each side of the candidate in its submap
+  int query_keys = 0;         // recent key scans merged into the query (0: the key scan alone)
+  int retry_interval = 3;     // key scans to wait after a refused candidate
   // Memory over long runs. A key scan taken where max_keyscans_per_place
   // earlier key scans that hold readings already lie (within place_radius
   // and place_angle of its pose, after the loop search it triggered) keeps
@@ -108,6 +112,13 @@ struct LoopClosureOptions {
   // the match pairs with the submap.
   double min_directional_inlier_fraction = 0.5;
   double max_icp_shift = 0.3;  // m: ICP may move the correlative result this far
+  // Uniqueness: the best pose of the search window at another place (more
+  // than distinct_radius from the match) must score below
+  // max_runner_up_ratio of the match's score, else the place is ambiguous
+  // (doors repeating along a corridor, rooms alike) and the loop refused
+  // (1: no test).
+  double distinct_radius = 1.0;      // m
+  double max_runner_up_ratio = 0.9;  // of the match's correlative score
   // Loop edge noise (1 sigma) and optimisation:
   double loop_sigma_translation = 0.05;  // m
   double loop_sigma_rotation = 0.01;     // rad
@@ -168,6 +179,8 @@ struct LoopClosureOptions {
     v.number("min_directional_inlier_fraction", min_directional_inlier_fraction,
              Bounds::closed(0.0, 1.0));
     v.number("max_icp_shift", max_icp_shift, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("distinct_radius", distinct_radius, Bounds::openClosed(0.0, 100.0, "m"));
+    v.number("max_runner_up_ratio", max_runner_up_ratio, Bounds::openClosed(0.0, 1.0));
     v.number("loop_sigma_translation", loop_sigma_translation, Bounds::openClosed(0.0, 100.0, "m"));
     v.number("loop_sigma_rotation", loop_sigma_rotation, Bounds::openClosed(0.0, kPi, "rad"));
     v.number("min_final_weight", min_final_weight, Bounds::closed(0.0, 1.0));
@@ -185,7 +198,8 @@ struct LoopClosureCounters {
   long key_scans = 0;
   long candidates = 0;    // verifications attempted
   long accepted = 0;      // loop edges added
-  long refused = 0;       // failed verification
+  long refused = 0;       // failed verification (ambiguous ones included)
+  long ambiguous = 0;     // refused: another place of the window scored nearly as well
   long dropped = 0;       // loop edges the kernel rejected at the end
   long inconsistent = 0;  // loops refused by the consistency test (not in `accepted`)
   long unconfirmed = 0;   // wide-window hypotheses no later key scan confirmed

@@ -135,6 +135,83 @@ TEST(CorrelativeSearch, BranchAndBoundEqualsTheExhaustiveSearch) {
   EXPECT_LT(maxAbsDifference(a.pose, b.pose), 1e-9);
 }
 
+// A corridor 80 m long and 2.4 m wide with a pillar against its north wall
+// every 3 m: every place looks like the places 3 m along.
+sim::PolygonWorld pillaredCorridor() {
+  sim::PolygonWorld world;
+  world.addPolygon({{-40, -1.2}, {40, -1.2}, {40, 1.2}, {-40, 1.2}});
+  for (int k = -13; k <= 13; ++k) world.addBox({3.0 * k, 1.0}, 0.4, 0.4);
+  return world;
+}
+
+// A submap as the loop closer builds one: sweeps 0.4 m apart along a line
+// through `pose` (its heading), from 4 m behind it to 4 m ahead.
+std::vector<Vector2> submapAround(const sim::PolygonWorld& world, const Pose2& pose,
+                                  std::mt19937* rng) {
+  std::vector<Vector2> points;
+  for (int k = -10; k <= 10; ++k) {
+    const std::vector<Vector2> sweep_k =
+        placedSweep(world, compose(pose, Pose2(0.4 * k, 0, 0)), rng);
+    points.insert(points.end(), sweep_k.begin(), sweep_k.end());
+  }
+  return points;
+}
+
+// The runner-up search leaves out the translations near the best pose and
+// finds the best of the rest: in the corridor the view 3 m along scores
+// nearly as well as the true pose, in the hall no other place comes near.
+TEST(CorrelativeSearch, RunnerUpIsAnotherPlaceAndTellsAnAliasedCorridorFromAHall) {
+  const CorrelativeMatcherOptions options;
+  struct Case {
+    sim::PolygonWorld world;
+    Pose2 pose;
+  };
+  const std::vector<Case> cases = {{pillaredCorridor(), Pose2(0.7, -0.2, 0.0)},
+                                   {hall(), Pose2(-3.0, 2.0, -0.6)}};
+  std::vector<double> ratios;
+  for (const Case& c : cases) {
+    std::mt19937 rng(11);
+    const std::vector<Vector2> reference = submapAround(c.world, c.pose, &rng);
+    const std::vector<Vector2> query =
+        pointsOf(sweep(c.world, compose(c.pose, Pose2(0.2, 0.1, 0.03)), &rng));
+    const LikelihoodGrid grid(reference, options);
+    const Pose2 guess = compose(c.pose, Pose2(0.5, -0.3, 0.05));
+    const CorrelativeResult best = correlativeSearch(query, grid, guess, 5.0, 0.3, options);
+    ASSERT_GT(best.score, 0.7);
+    const CorrelativeResult rival =
+        correlativeRunnerUp(query, grid, guess, 5.0, 0.3, options, best.pose, 1.0, 0.0);
+    EXPECT_GT(std::hypot(rival.pose.x - best.pose.x, rival.pose.y - best.pose.y), 1.0);
+    EXPECT_LE(rival.score, best.score);
+    ratios.push_back(rival.score / best.score);
+  }
+  EXPECT_GT(ratios[0], 0.95) << "the corridor's places one pillar apart";
+  EXPECT_LT(ratios[1], 0.7) << "the hall";
+}
+
+// The bound prunes only what cannot beat the best outside the excluded
+// disc: the runner-up equals the exhaustive search's (one level).
+TEST(CorrelativeSearch, RunnerUpOfTheBranchAndBoundEqualsTheExhaustiveOne) {
+  const sim::PolygonWorld world = pillaredCorridor();
+  std::mt19937 rng(5);
+  const Pose2 pose(1.0, 0.1, 0.0);
+  const std::vector<Vector2> reference = submapAround(world, pose, &rng);
+  const std::vector<Vector2> query =
+      pointsOf(sweep(world, compose(pose, Pose2(0.3, 0.1, 0.02)), &rng));
+  CorrelativeMatcherOptions exhaustive;
+  exhaustive.levels = 1;
+  const CorrelativeMatcherOptions bounded;
+  const Pose2 best =
+      correlativeSearch(query, LikelihoodGrid(reference, exhaustive), pose, 4.0, 0.1, exhaustive)
+          .pose;
+  const CorrelativeResult a = correlativeRunnerUp(query, LikelihoodGrid(reference, exhaustive),
+                                                  pose, 4.0, 0.1, exhaustive, best, 1.0, 0.0);
+  const CorrelativeResult b = correlativeRunnerUp(query, LikelihoodGrid(reference, bounded), pose,
+                                                  4.0, 0.1, bounded, best, 1.0, 0.0);
+  ASSERT_GT(a.score, 0.5);
+  EXPECT_NEAR(a.score, b.score, 1e-6);
+  EXPECT_LT(maxAbsDifference(a.pose, b.pose), 1e-9);
+}
+
 // The front end's next pose: the true step from `from` to `to` (0.1 m),
 // turned 0.4 deg too far per metre.
 Pose2 driftedStep(const Pose2& front_end, const Pose2& from, const Pose2& to) {

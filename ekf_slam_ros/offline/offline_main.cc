@@ -226,9 +226,10 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   line.setf(std::ios::fixed);
   line.precision(3);
   line << c.key_scans << " key scans (" << c.released
-       << " without readings: their place was full), " << c.candidates << " candidates verified, "
-       << c.accepted << " loops accepted (" << c.dropped << " dropped by the kernel at the end, "
-       << c.inconsistent << " refused as inconsistent with the graph, " << c.unconfirmed
+       << " without readings: their place was full), " << c.candidates << " candidates verified ("
+       << c.ambiguous << " refused as ambiguous), " << c.accepted << " loops accepted ("
+       << c.dropped << " dropped by the kernel at the end, " << c.inconsistent
+       << " refused as inconsistent with the graph, " << c.unconfirmed
        << " wide-window matches never confirmed), " << c.optimisations
        << " optimisations; verification " << c.verification_seconds << " s, optimisation "
        << c.optimisation_seconds << " s";

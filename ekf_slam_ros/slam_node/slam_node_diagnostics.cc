@@ -52,6 +52,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("key scans without readings (place full)", loops.released);
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);
+    status.add("loop candidates refused as ambiguous", loops.ambiguous);
     status.add("loops refused as inconsistent", loops.inconsistent);
     status.add("wide-window matches never confirmed", loops.unconfirmed);
     status.add("filter re-anchored", counters.reanchors);
