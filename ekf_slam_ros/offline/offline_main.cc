@@ -30,6 +30,9 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#ifdef __GLIBC__  // defined by the headers above
+#include <malloc.h>
+#endif
 
 #include <chrono>
 #include <cmath>
@@ -430,6 +433,13 @@ int main(int argc, char** argv) {
                                 config.pipeline.filter.laser_pose);
   }
   const Pose2 laser = config.pipeline.filter.laser_pose;
+#ifdef __GLIBC__
+  // The loop verification's grids and the smoother's matrices are freed by
+  // now, but glibc keeps their pages in the heap, beneath the occupancy
+  // grids about to be built: hand them back first (hospital log: peak
+  // 306 → 295 MiB).
+  if (maps) malloc_trim(0);
+#endif
   if (maps && error.empty()) {
     error = buildMap(config.map, log, final_poses, laser).save(out_dir + "/map");
   }
