@@ -3,8 +3,10 @@
 soak (tools/dev/live_soak.py).
 
 usage: tools/analysis/plot_soak.py --filter output/soak/filter_soak.txt \
-                          --live output/soak/live_soak.txt --out docs/images/soak.png
-Either input may be left out.
+                          --live output/soak/live_soak.txt \
+                          --replay output/soak_intel/live_soak.txt --out docs/images/soak.png
+Any input may be left out. --replay is a live soak of a recorded log
+(live_soak.py --bag), drawn with its key scans.
 """
 import argparse
 
@@ -30,11 +32,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--filter")
     parser.add_argument("--live")
+    parser.add_argument("--replay")
+    parser.add_argument("--replay-title", default="live node, Intel log replayed at 1x, "
+                        "shipped configuration (loop closure on)")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
-    panels = [p for p in (args.filter, args.live) if p]
+    panels = [p for p in (args.filter, args.live, args.replay) if p]
     if not panels:
-        parser.error("give --filter, --live or both")
+        parser.error("give --filter, --live, --replay or several")
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 3.2 * len(panels)), squeeze=False)
     row = 0
     if args.filter:
@@ -52,6 +57,16 @@ def main():
         ax = axes[row][0]
         plot_pair(ax, d[:, 0] / 60.0, d[:, 1], d[:, 2], "CPU (%)", "tab:green",
                   "live node, simulator driving the office loop")
+        ax.set_xlabel("minutes")
+        ax.set_ylabel("ekf_slam_node RSS (MiB)", color="tab:blue")
+        row += 1
+    if args.replay:
+        d = np.loadtxt(args.replay, ndmin=2)
+        ax = axes[row][0]
+        twin = plot_pair(ax, d[:, 0] / 60.0, d[:, 1], d[:, 5], "key scans", "tab:orange",
+                         args.replay_title)
+        twin.plot(d[:, 0] / 60.0, d[:, 5] - d[:, 6], color="tab:red", linewidth=0.8)
+        twin.set_ylabel("key scans (red: holding readings)", color="tab:orange")
         ax.set_xlabel("minutes")
         ax.set_ylabel("ekf_slam_node RSS (MiB)", color="tab:blue")
     fig.tight_layout()

@@ -1,14 +1,20 @@
 #!/usr/bin/python3
-"""Live soak: the simulator drives the office loop, lap after lap, with the
-whole stack running (emulated P3-DX and LMS200 on pseudo-terminals, the
-drivers, ekf_slam_node), and the node's memory and CPU are logged once a
-second.
+"""Live soak: the node runs for a fixed wall-clock time, and its memory and
+CPU are logged once a second.
 
-Starts its own roscore (port --port), `sim.launch waypoints:=office_loop
-laps:=1000`, finds the ekf_slam_node process and samples /proc/<pid>: the
-resident set (VmRSS) and the CPU time (utime + stime) of the last second.
-It also records the node's landmark count and path length from
-/diagnostics, so that memory can be set against what the map explains.
+Two drives:
+- the simulator (the default): `sim.launch waypoints:=office_loop
+  laps:=1000`, the whole stack on pseudo-terminals (emulated P3-DX and
+  LMS200, the drivers, ekf_slam_node), lap after lap of the office;
+- a recorded log (--bag): `slam.launch` with its shipped configuration
+  (loop closure on) and `rosbag play --clock -r RATE`, use_sim_time; the
+  robot's own building, revisited as the log revisits it.
+
+Starts its own roscore (port --port), finds the ekf_slam_node process and
+samples /proc/<pid>: the resident set (VmRSS) and the CPU time (utime +
+stime) of the last second. It also records the node's landmark count, scans
+processed and key scans from /diagnostics, so that memory can be set
+against what the map explains.
 
 Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed key_scans
 key_scans_without_readings; the last two 0 with loop closure off)
@@ -18,6 +24,8 @@ usage (after make build, with the workspace sourced):
   source .build/setup.bash
   tools/dev/live_soak.py --minutes 30 --out output/soak
   tools/dev/live_soak.py --minutes 30 --out output/soak_loops --loop-closure
+  tools/dev/live_soak.py --minutes 30 --out output/soak_intel \
+      --bag ../shared/datasets/intel.orig.bag
 """
 import argparse
 import os
@@ -103,8 +111,15 @@ def main():
                         help="the simulator's configuration with the loop-closing back end "
                              "on (written to OUT/soak_config.yaml): its key scans are what "
                              "grows with the distance driven")
+    parser.add_argument("--bag", default="",
+                        help="replay this log through slam.launch (its shipped "
+                             "configuration, or --config) instead of driving the simulator")
+    parser.add_argument("--rate", type=float, default=1.0, help="replay rate with --bag")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.bag and not os.path.exists(args.bag):
+        print("live_soak: %s not found" % args.bag, file=sys.stderr)
+        return 2
     if args.loop_closure:
         args.config = loop_closure_config(args)
     env = dict(os.environ, ROS_MASTER_URI="http://localhost:%d" % args.port)
@@ -114,15 +129,24 @@ def main():
                               stderr=subprocess.STDOUT, start_new_session=True)]
     try:
         time.sleep(3.0)
-        procs.append(subprocess.Popen(
-            ["roslaunch", "ekf_slam", "sim.launch", "waypoints:=office_loop", "laps:=1000",
-             "link_dir:=/tmp/ekf_slam_soak"] +
-            (["config:=" + os.path.abspath(args.config)] if args.config else []),
-            env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+        config = ["config:=" + os.path.abspath(args.config)] if args.config else []
+        if args.bag:
+            subprocess.check_call(["rosparam", "set", "use_sim_time", "true"], env=env)
+            launch = ["roslaunch", "ekf_slam", "slam.launch", "features:=false"]
+        else:
+            launch = ["roslaunch", "ekf_slam", "sim.launch", "waypoints:=office_loop",
+                      "laps:=1000", "link_dir:=/tmp/ekf_slam_soak"]
+        procs.append(subprocess.Popen(launch + config, env=env, stdout=log,
+                                      stderr=subprocess.STDOUT, start_new_session=True))
         pid = find_node("ekf_slam_node", time.monotonic() + 60.0)
         if pid is None:
             print("live_soak: ekf_slam_node did not start (see %s)" % log.name, file=sys.stderr)
             return 2
+        if args.bag:
+            time.sleep(3.0)
+            procs.append(subprocess.Popen(
+                ["rosbag", "play", "--clock", "--quiet", "-r", str(args.rate), args.bag],
+                env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
         rospy.init_node("live_soak", anonymous=True, disable_signals=True)
         diagnostics = Diagnostics()
         path = os.path.join(args.out, "live_soak.txt")
