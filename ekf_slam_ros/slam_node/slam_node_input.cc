@@ -206,6 +206,16 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
         text << ": the newest is " << (stamp - latest).toSec() << " s older than the scan";
         if (behind) *behind = true;
       } else {
+        // The tf listener runs on its own thread: the sample the first
+        // attempt lacked (odometry resuming after a pause) may have arrived
+        // since. Then the transform is there and nothing is missing.
+        try {
+          const geometry_msgs::TransformStamped t =
+              tf_buffer_.lookupTransform(target, source, stamp);
+          *pose = fromTransformMessage(t.transform);
+          return true;
+        } catch (const tf2::TransformException&) {
+        }
         text << ": the scan is older than the transforms still buffered (" << e.what() << ")";
       }
     } catch (const tf2::TransformException&) {
