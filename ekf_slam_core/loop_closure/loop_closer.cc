@@ -395,10 +395,11 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   }
   const std::vector<Vector2> query = queryPoints(key, false);
   if (static_cast<int>(query.size()) < icp_.min_correspondences) return false;
+  const std::vector<Vector2> sparse_query = queryPoints(key, true);
 
   const LikelihoodGrid grid(submap, options_.correlative);
-  const CorrelativeResult coarse = correlativeSearch(
-      queryPoints(key, true), grid, guess, radius, angle, options_.correlative, options_.min_score);
+  const CorrelativeResult coarse = correlativeSearch(sparse_query, grid, guess, radius, angle,
+                                                     options_.correlative, options_.min_score);
   if (coarse.score < options_.min_score) return false;
 
   const PointCloudReference reference(submap, icp_.normal_radius,
@@ -427,7 +428,7 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   // well (the search above returns only the best pose).
   if (options_.max_runner_up_ratio < 1.0) {
     const CorrelativeResult rival = correlativeRunnerUp(
-        queryPoints(key, true), grid, guess, radius, angle, options_.correlative, coarse.pose,
+        sparse_query, grid, guess, radius, angle, options_.correlative, coarse.pose,
         options_.distinct_radius, options_.max_runner_up_ratio * coarse.score);
     if (rival.score > 0.0) {
       ++counters_.ambiguous;

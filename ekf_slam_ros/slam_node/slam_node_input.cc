@@ -187,9 +187,11 @@ void SlamNode::enqueue(PendingInput pending, const std::function<void()>& add) {
 bool SlamNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
                       Pose2* pose, std::string* why, bool* behind) const {
   if (behind) *behind = false;
+  const auto attempt = [&]() {
+    *pose = fromTransformMessage(tf_buffer_.lookupTransform(target, source, stamp).transform);
+  };
   try {
-    const geometry_msgs::TransformStamped t = tf_buffer_.lookupTransform(target, source, stamp);
-    *pose = fromTransformMessage(t.transform);
+    attempt();
     return true;
   } catch (const tf2::TransformException& e) {
     std::ostringstream text;
@@ -210,9 +212,7 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
         // attempt lacked (odometry resuming after a pause) may have arrived
         // since. Then the transform is there and nothing is missing.
         try {
-          const geometry_msgs::TransformStamped t =
-              tf_buffer_.lookupTransform(target, source, stamp);
-          *pose = fromTransformMessage(t.transform);
+          attempt();
           return true;
         } catch (const tf2::TransformException&) {
         }
