@@ -100,6 +100,39 @@ double explainedStructure(const std::vector<Vector2>& query, const PointCloudRef
   return all < 1.0 ? 1.0 : explained / all;
 }
 
+double wallDirection(const std::vector<Vector2>& points, const ScanMatcherOptions& options,
+                     double* concentration, int* normals) {
+  if (concentration) *concentration = 0.0;
+  if (normals) *normals = 0;
+  if (points.empty()) return 0.0;
+  const PointCloudReference cloud(points, options.normal_radius,
+                                  options.initial_correspondence_distance);
+  // A wall's normal n and the wall itself are a quarter turn apart, and
+  // perpendicular walls a quarter turn again: all agree on 4 angle(n).
+  double c = 0.0, s = 0.0;
+  for (const Vector2& n : cloud.normals()) {
+    const double a = 4.0 * std::atan2(n.y(), n.x());
+    c += std::cos(a);
+    s += std::sin(a);
+  }
+  const int count = static_cast<int>(cloud.normals().size());
+  if (normals) *normals = count;
+  if (count == 0) return 0.0;
+  if (concentration) *concentration = std::hypot(c, s) / count;
+  const double direction = std::atan2(s, c) / 4.0;  // in [−45°, 45°]
+  return direction >= kPi / 4.0 ? direction - kPi / 2.0 : direction;
+}
+
+namespace {
+
+// `a` modulo a quarter turn, in [−45°, 45°).
+double wrapQuarter(double a) {
+  constexpr double kQuarter = kPi / 2.0;
+  return a - kQuarter * std::floor(a / kQuarter + 0.5);
+}
+
+}  // namespace
+
 LoopCloser::LoopCloser(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
                        long scan_history)
     : options_(options), icp_(matcher), scan_history_(std::max(0L, scan_history)) {
@@ -140,6 +173,15 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
                             const Pose2& front_end) {
   KeyScan key;
   key.front_end = front_end;
+  if (options_.enabled && options_.heading_radius > 0.0) {
+    double concentration = 0.0;
+    int normals = 0;
+    const double direction = wallDirection(points, icp_, &concentration, &normals);
+    if (normals >= options_.heading_min_normals &&
+        concentration >= options_.heading_min_concentration) {
+      key.wall_direction = direction;
+    }
+  }
   key.points = std::make_shared<const std::vector<Vector2>>(points);
   key.sparse = thinned(points, options_.search_point_spacing);
   key.scan_index = scanCount();  // its ScanEntry is pushed next
@@ -174,8 +216,52 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
   adjacency_[index].emplace_back(previous, distance);
 
   if (!options_.enabled) return;
+  const long loops = counters_.accepted;
   searchLoops(index);
+  // That optimisation took the heading edges so far in.
+  if (counters_.accepted != loops) heading_loops_since_optimisation_ = 0;
+  if (options_.heading_radius > 0.0) addHeadingLoop(index);
   releaseIfPlaceIsFull(index);
+}
+
+void LoopCloser::addHeadingLoop(int key) {
+  const double direction = keys_[key].wall_direction;
+  if (std::isnan(direction) || hypothesis_) return;  // no walls; or its pose is in doubt
+  const Pose2& here = graph_.pose(key);
+  const std::vector<double> distance = graphDistances(key);
+  int nearest = -1;
+  double best = options_.heading_radius;
+  for (int j = 0; j < key; ++j) {
+    if (std::isnan(keys_[j].wall_direction) || distance[j] < options_.min_loop_travel) continue;
+    const double d = std::hypot(graph_.pose(j).x - here.x, graph_.pose(j).y - here.y);
+    if (d <= best) {
+      best = d;
+      nearest = j;
+    }
+  }
+  if (nearest < 0) return;
+  // The chain's heading window for this graph distance, widened by the two
+  // wall directions' noise (3 sigma each way).
+  const double window =
+      std::hypot(searchAngle(distance[nearest]),
+                 options_.search_sigmas * std::sqrt(2.0) * options_.heading_sigma);
+  if (window >= kPi / 4.0) return;  // which quarter turn would be a guess
+  const double estimate = wrapAngle(here.theta - graph_.pose(nearest).theta);
+  const double residual = wrapQuarter(estimate + direction - keys_[nearest].wall_direction);
+  if (std::abs(residual) > window) return;
+  PoseGraphEdge edge;
+  edge.from = nearest;
+  edge.to = key;
+  edge.measurement = Pose2(0.0, 0.0, wrapAngle(estimate - residual));
+  const double variance = 2.0 * options_.heading_sigma * options_.heading_sigma;
+  edge.information = Vector3(0.0, 0.0, 1.0 / variance).asDiagonal();
+  edge.robust = true;
+  graph_.addEdge(edge);
+  ++counters_.heading_loops;
+  if (++heading_loops_since_optimisation_ >= options_.heading_reoptimise) {
+    optimise();
+    heading_loops_since_optimisation_ = 0;
+  }
 }
 
 void LoopCloser::searchLoops(int index) {
@@ -452,7 +538,7 @@ void LoopCloser::finish() {
     hypothesis_.reset();
     ++counters_.unconfirmed;
   }
-  if (counters_.accepted == 0) return;
+  if (counters_.accepted == 0 && counters_.heading_loops == 0) return;
   final_problem_ = graph_;
   optimise();
   // Loops the kernel no longer believes are dropped, and the rest re-solved
@@ -460,7 +546,8 @@ void LoopCloser::finish() {
   long dropped = 0;
   for (int e = 0; e < static_cast<int>(graph_.edges().size()); ++e) {
     const PoseGraphEdge& edge = graph_.edges()[e];
-    if (!edge.robust || !edge.active) continue;
+    // Loops only: a heading edge the kernel doubts keeps its small weight.
+    if (!edge.robust || !edge.active || edge.information(0, 0) == 0.0) continue;
     if (graph_.edgeWeight(e, options_.optimizer.robust_kernel_width) < options_.min_final_weight) {
       graph_.setEdgeActive(e, false);
       ++dropped;

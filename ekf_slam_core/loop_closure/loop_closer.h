@@ -33,6 +33,7 @@
 //   front end's increment since that key scan.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -130,6 +131,27 @@ struct LoopClosureOptions {
   // quantile, else the loop is refused and the graph restored. A false loop
   // then never bends the map, whatever its scan score (0: no test).
   double consistency_probability = 0.9999999;  // χ²₃ quantile about 36
+  // Heading loops. A key scan whose walls run in one direction modulo 90°
+  // (wallDirection below: at least heading_min_normals wall normals,
+  // concentrated to at least heading_min_concentration) carries that
+  // direction α in its own frame. When an earlier such key scan lies
+  // within heading_radius of its estimated position and at least
+  // min_loop_travel of graph distance away, both saw the walls of one
+  // place, which run the same way on a return: a heading-only edge says
+  // θ_new + α_new = θ_old + α_old modulo 90°, with the quarter turn nearest
+  // the graph's estimate, σ = √2 heading_sigma, Cauchy kernel. It is taken
+  // when the estimate's disagreement lies within the loop search's heading
+  // window for that graph distance (widened by the two directions' noise),
+  // and never when that window reaches 45° (the quarter turn would be a
+  // guess). The scans need not match, so the heading of a return seen from
+  // the other direction closes too; of the building nothing is assumed but
+  // that the walls of one place are parallel or perpendicular. The graph is
+  // re-optimised after every heading_reoptimise such edges. 0 radius: off.
+  double heading_radius = 5.0;             // m
+  double heading_min_concentration = 0.8;  // of the normals' angles times 4 (1: all parallel)
+  int heading_min_normals = 40;
+  double heading_sigma = 0.05;  // rad: one key scan's wall direction (1 sigma)
+  int heading_reoptimise = 10;
   // In the pipeline: after each optimisation the EKF takes the loop-closed
   // geometry (robot and landmarks move with their key scans).
   bool reanchor_filter = true;
@@ -185,6 +207,11 @@ struct LoopClosureOptions {
     v.number("loop_sigma_rotation", loop_sigma_rotation, Bounds::openClosed(0.0, kPi, "rad"));
     v.number("min_final_weight", min_final_weight, Bounds::closed(0.0, 1.0));
     v.number("consistency_probability", consistency_probability, Bounds::closedOpen(0.0, 1.0));
+    v.number("heading_radius", heading_radius, Bounds::closed(0.0, 1000.0, "m"));
+    v.number("heading_min_concentration", heading_min_concentration, Bounds::closed(0.0, 1.0));
+    v.integer("heading_min_normals", heading_min_normals, Bounds::closed(1, 100000));
+    v.number("heading_sigma", heading_sigma, Bounds::above(0.0, "rad"));
+    v.integer("heading_reoptimise", heading_reoptimise, Bounds::closed(1, 100000));
     v.flag("reanchor_filter", reanchor_filter);
     v.integer("correction_delay", correction_delay, Bounds::closed(-1, 100000, "scans"));
     v.section("optimizer", optimizer);
@@ -196,14 +223,15 @@ struct LoopClosureOptions {
 
 struct LoopClosureCounters {
   long key_scans = 0;
-  long candidates = 0;    // verifications attempted
-  long accepted = 0;      // loop edges added
-  long refused = 0;       // failed verification (ambiguous ones included)
-  long ambiguous = 0;     // refused: another place of the window scored nearly as well
-  long dropped = 0;       // loop edges the kernel rejected at the end
-  long inconsistent = 0;  // loops refused by the consistency test (not in `accepted`)
-  long unconfirmed = 0;   // wide-window hypotheses no later key scan confirmed
-  long released = 0;      // key scans whose readings were let go (max_keyscans_per_place)
+  long candidates = 0;     // verifications attempted
+  long accepted = 0;       // loop edges added
+  long refused = 0;        // failed verification (ambiguous ones included)
+  long ambiguous = 0;      // refused: another place of the window scored nearly as well
+  long dropped = 0;        // loop edges the kernel rejected at the end
+  long inconsistent = 0;   // loops refused by the consistency test (not in `accepted`)
+  long unconfirmed = 0;    // wide-window hypotheses no later key scan confirmed
+  long released = 0;       // key scans whose readings were let go (max_keyscans_per_place)
+  long heading_loops = 0;  // heading-only edges between the walls of one place
   long optimisations = 0;
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;
@@ -219,6 +247,15 @@ struct LoopClosureCounters {
 double explainedStructure(const std::vector<Vector2>& query, const PointCloudReference& reference,
                           const Pose2& pose, const Vector2& direction,
                           const ScanMatcherOptions& options);
+
+// The direction the walls of `points` (one scan, its own frame) run in,
+// modulo 90°, in [−45°, 45°): the mean of the wall normals' angles times
+// four (normals fitted as the scan matcher fits them, `options`), divided
+// by four. `concentration` (may be null) gets the length of that mean, 1
+// when every wall is parallel or perpendicular to the others, near 0 for
+// walls at every angle; `normals` the number of normals (0: no direction).
+double wallDirection(const std::vector<Vector2>& points, const ScanMatcherOptions& options,
+                     double* concentration, int* normals);
 
 class LoopCloser {
  public:
@@ -270,7 +307,8 @@ class LoopCloser {
   const Pose2& scanOffset(int scan) const { return scans_[scan - first_scan_].offset; }
   double scanStamp(int scan) const { return scans_[scan - first_scan_].stamp; }
   // Graph node `key` was taken at this scan (index in addScan order). Loop
-  // edges are the graph's robust edges; the sequential ones are not robust.
+  // and heading edges are the graph's robust edges (a heading edge informs
+  // the heading alone); the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
   int keyCount() const { return static_cast<int>(keys_.size()); }
   // A key scan's readings (≤ max_range, robot frame; empty when released,
@@ -292,7 +330,11 @@ class LoopCloser {
     int retry_after = 0;  // key index before which it is not tried again
     int scan_index = -1;  // index of its scan in addScan order
     double stamp = 0.0;   // of its scan
+    // Its walls' direction modulo 90° (own frame); NaN when they have none.
+    double wall_direction = std::numeric_limits<double>::quiet_NaN();
   };
+  void addHeadingLoop(int key);
+  int heading_loops_since_optimisation_ = 0;
   struct ScanEntry {
     double stamp;
     int key;       // key scan it hangs off (-1 before the first)

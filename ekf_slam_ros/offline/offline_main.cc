@@ -233,7 +233,8 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
        << c.ambiguous << " refused as ambiguous), " << c.accepted << " loops accepted ("
        << c.dropped << " dropped by the kernel at the end, " << c.inconsistent
        << " refused as inconsistent with the graph, " << c.unconfirmed
-       << " wide-window matches never confirmed), " << c.optimisations
+       << " wide-window matches never confirmed), " << c.heading_loops
+       << " heading loops between the walls of one place, " << c.optimisations
        << " optimisations; verification " << c.verification_seconds << " s, optimisation "
        << c.optimisation_seconds << " s";
   return line.str();
