@@ -88,6 +88,8 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
   double lambda = options.initial_lambda;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   std::vector<Eigen::Triplet<double>> triplets;
+  // The edges, and so H's pattern, stay the same through the iterations.
+  bool analysed = false;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
     // Normal equations at the current poses, weights frozen (IRLS).
     triplets.clear();
@@ -110,7 +112,10 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
     }
     Eigen::SparseMatrix<double> H(unknowns, unknowns);
     H.setFromTriplets(triplets.begin(), triplets.end());
-    solver.analyzePattern(H);
+    if (!analysed) {
+      solver.analyzePattern(H);
+      analysed = true;
+    }
 
     // Levenberg-Marquardt: raise the damping until a step lowers the cost.
     const DampedStep step = levenbergMarquardtStep(
