@@ -135,9 +135,10 @@ struct LoopClosureOptions {
   // (wallDirection below: at least heading_min_normals wall normals,
   // concentrated to at least heading_min_concentration) carries that
   // direction α in its own frame. When an earlier such key scan lies
-  // within heading_radius of its estimated position and at least
-  // min_loop_travel of graph distance away, both saw the walls of one
-  // place, which run the same way on a return: a heading-only edge says
+  // within heading_radius of its estimated position (the key scans'
+  // reading range: closer than that, both can see the same walls) and at
+  // least min_loop_travel of graph distance away, their walls are taken
+  // to run the same way, as a place's do on a return: a heading-only edge says
   // θ_new + α_new = θ_old + α_old modulo 90°, with the quarter turn nearest
   // the graph's estimate, σ = √2 heading_sigma, Cauchy kernel. It is taken
   // when the estimate's disagreement lies within the loop search's heading
@@ -147,7 +148,7 @@ struct LoopClosureOptions {
   // the other direction closes too; of the building nothing is assumed but
   // that the walls of one place are parallel or perpendicular. The graph is
   // re-optimised after every heading_reoptimise such edges. 0 radius: off.
-  double heading_radius = 5.0;             // m
+  double heading_radius = 15.0;            // m
   double heading_min_concentration = 0.8;  // of the normals' angles times 4 (1: all parallel)
   int heading_min_normals = 40;
   double heading_sigma = 0.05;  // rad: one key scan's wall direction (1 sigma)

@@ -551,7 +551,7 @@ int main(int argc, char** argv) {
                        " ambiguous left out"
                  : std::string("the filter's associations"))
          << "), " << smoother.observation_edges << " observation edges, "
-         << smoother.constraint_edges << " loop edges, " << smoother.detached_visits
+         << smoother.constraint_edges << " loop and heading-loop edges, " << smoother.detached_visits
          << " revisits detached; " << smoother.summary.iterations << " iterations ("
          << (smoother.summary.converged ? "converged" : "not converged") << "), cost "
          << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost << ", "
