@@ -551,11 +551,11 @@ int main(int argc, char** argv) {
                        " ambiguous left out"
                  : std::string("the filter's associations"))
          << "), " << smoother.observation_edges << " observation edges, "
-         << smoother.constraint_edges << " loop and heading-loop edges, " << smoother.detached_visits
-         << " revisits detached; " << smoother.summary.iterations << " iterations ("
-         << (smoother.summary.converged ? "converged" : "not converged") << "), cost "
-         << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost << ", "
-         << smoothing_seconds << " s\n"
+         << smoother.constraint_edges << " loop and heading-loop edges, "
+         << smoother.detached_visits << " revisits detached; " << smoother.summary.iterations
+         << " iterations (" << (smoother.summary.converged ? "converged" : "not converged")
+         << "), cost " << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost
+         << ", " << smoothing_seconds << " s\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
          << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
