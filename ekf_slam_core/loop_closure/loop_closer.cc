@@ -188,6 +188,7 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
   key.stamp = stamp;
   ++counters_.key_scans;
   adjacency_.emplace_back();
+  distances_from_ = -1;
   if (keys_.empty()) {
     graph_.addNode(front_end);
     keys_.push_back(std::move(key));
@@ -214,6 +215,7 @@ void LoopCloser::addKeyScan(double stamp, const std::vector<Vector2>& points,
   graph_.addEdge(edge);
   adjacency_[previous].emplace_back(index, distance);
   adjacency_[index].emplace_back(previous, distance);
+  distances_from_ = -1;
 
   if (!options_.enabled) return;
   const long loops = counters_.accepted;
@@ -256,7 +258,7 @@ void LoopCloser::addHeadingLoop(int key) {
   const double variance = 2.0 * options_.heading_sigma * options_.heading_sigma;
   edge.information = Vector3(0.0, 0.0, 1.0 / variance).asDiagonal();
   edge.robust = true;
-  graph_.addEdge(edge);
+  heading_edges_.insert(graph_.addEdge(edge));
   ++counters_.heading_loops;
   if (++heading_loops_since_optimisation_ >= options_.heading_reoptimise) {
     optimise();
@@ -381,12 +383,14 @@ bool LoopCloser::addLoopEdge(int from, int to, const Pose2& relative) {
   ++counters_.accepted;
   adjacency_[from].emplace_back(to, 0.0);
   adjacency_[to].emplace_back(from, 0.0);
+  distances_from_ = -1;
   graph_.setEdgeRobust(edge_index, true);
   return true;
 }
 
 // Dijkstra from `from`: travel along sequential edges, zero across loops.
 std::vector<double> LoopCloser::graphDistances(int from) const {
+  if (from == distances_from_) return distances_;
   std::vector<double> distance(keys_.size(), std::numeric_limits<double>::infinity());
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
@@ -403,6 +407,8 @@ std::vector<double> LoopCloser::graphDistances(int from) const {
       }
     }
   }
+  distances_from_ = from;
+  distances_ = distance;
   return distance;
 }
 
@@ -547,7 +553,7 @@ void LoopCloser::finish() {
   for (int e = 0; e < static_cast<int>(graph_.edges().size()); ++e) {
     const PoseGraphEdge& edge = graph_.edges()[e];
     // Loops only: a heading edge the kernel doubts keeps its small weight.
-    if (!edge.robust || !edge.active || edge.information(0, 0) == 0.0) continue;
+    if (!edge.robust || !edge.active || heading_edges_.count(e) > 0) continue;
     if (graph_.edgeWeight(e, options_.optimizer.robust_kernel_width) < options_.min_final_weight) {
       graph_.setEdgeActive(e, false);
       ++dropped;

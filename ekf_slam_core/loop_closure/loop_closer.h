@@ -37,6 +37,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "ekf_slam_core/geometry/option_fields.h"
@@ -345,6 +346,9 @@ class LoopCloser {
   void addKeyScan(double stamp, const std::vector<Vector2>& points, const Pose2& front_end);
   // False when the consistency test refused it (the graph is then as before).
   bool addLoopEdge(int from, int to, const Pose2& relative);
+  // Graph distances from `from` (Dijkstra); the last result is kept until
+  // the graph's adjacency changes, since the loop search and the heading
+  // loops of a key scan both ask for it.
   std::vector<double> graphDistances(int from) const;
   // Up to max_candidates key scans to verify, most likely first.
   std::vector<int> pickCandidates(int key, const std::vector<double>& distance) const;
@@ -377,6 +381,9 @@ class LoopCloser {
   int first_scan_ = 0;
   long scan_history_ = 0;                                       // see the constructor
   std::vector<std::vector<std::pair<int, double>>> adjacency_;  // graph distance edges
+  mutable int distances_from_ = -1;  // graphDistances' cached source (-1: none)
+  mutable std::vector<double> distances_;
+  std::unordered_set<int> heading_edges_;  // graph edge indices of the heading loops
   LoopClosureCounters counters_;
   int next_attempt_ = 0;  // key index before which no loop is tried (after a refusal)
   struct Hypothesis {
