@@ -226,6 +226,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       }
       MatchResult match;
       odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
+      counters_.scan_match_unchecked = scan_matcher_->counters().unchecked_by_odometry;
       if (match.ok) {
         ++counters_.scan_matches;
       } else {

@@ -235,12 +235,13 @@ struct PipelineCounters {
   long scan_matches = 0;          // scans aligned by the scan matcher
   long scan_match_refusals = 0;   // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
-  long reanchors = 0;                     // times the filter took the loop-closed geometry
-  long room_rebuilds = 0;                 // rooms.enabled: times the rooms were rebuilt …
-  long room_rebuild_failures = 0;         // … and found no usable map (no walls yet, too large)
-  int rooms = 0;                          // rooms in the last rebuild (0: no gating now)
-  int doorways = 0;                       // doorways in the last rebuild
-  double nis_sum = 0.0;                   // over all matches
+  long scan_match_unchecked = 0;   // matches not checked against the wheels (stamp not increasing)
+  long reanchors = 0;              // times the filter took the loop-closed geometry
+  long room_rebuilds = 0;          // rooms.enabled: times the rooms were rebuilt …
+  long room_rebuild_failures = 0;  // … and found no usable map (no walls yet, too large)
+  int rooms = 0;                   // rooms in the last rebuild (0: no gating now)
+  int doorways = 0;                // doorways in the last rebuild
+  double nis_sum = 0.0;            // over all matches
 };
 
 // One entry per scan, for the trajectory files and the smoother.

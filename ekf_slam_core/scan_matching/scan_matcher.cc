@@ -348,6 +348,9 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
         << radToDeg(correction.theta) << " deg) beyond max_correction_*";
       match.ok = false;
       match.message = m.str();
+    } else if (odometry_gate_ > 0.0 && !(scan.stamp > last_stamp_)) {
+      ++counters_.unchecked_by_odometry;  // the wheels' increment is not this step's
+      corrected = match.pose;
     } else if (odometry_gate_ > 0.0) {
       const double d2 = odometryDisagreement(raw_odometry, match.pose, scan.stamp - last_stamp_);
       if (d2 > odometry_gate_) {

@@ -77,6 +77,10 @@ struct ScanMatcherOptions {
   // The odometry may also be stamped late or early against the scan (an
   // unsynchronised clock, a sample that arrived late): the motion during
   // odometry_check_sigma_time at the step's speed is added along the step.
+  // A scan stamped no later than the previous one is not checked (counted):
+  // the odometry looked up at such a stamp is where the robot was before,
+  // not where the scan was taken, so its increment says nothing of the
+  // match (logs whose clock steps back, as Intel's does).
   double odometry_gate_probability = 0.999;        // 0: no check
   double odometry_check_sigma_translation = 0.05;  // m, floor per scan (1 sigma)
   double odometry_check_sigma_rotation = 0.0524;   // rad, floor per scan (1 sigma, 3 deg)
@@ -174,8 +178,9 @@ std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser
 
 struct ScanMatcherCounters {
   long matched = 0;
-  long refused = 0;              // fell back to the odometry increment (every reason)
-  long refused_by_odometry = 0;  // of those, refused by the check against the wheels
+  long refused = 0;                // fell back to the odometry increment (every reason)
+  long refused_by_odometry = 0;    // of those, refused by the check against the wheels
+  long unchecked_by_odometry = 0;  // matches not checked: stamp not after the previous scan's
   long key_scans = 0;
 };
 

@@ -261,7 +261,9 @@ TEST(ScanMatchingOdometry, AMatchTheWheelsCannotExplainIsRefused) {
     Pose2 odometry;
     Pose2 corrected;
     for (int k = 0; k < 8; ++k) {
-      corrected = matcher.process(sweep(world, Pose2(), Pose2(), &rng), odometry, Pose2());
+      Scan scan = sweep(world, Pose2(), Pose2(), &rng);
+      scan.stamp = 10.0 * k;  // a slow lift: the stamps leave the wheels no doubt
+      corrected = matcher.process(scan, odometry, Pose2());
       odometry = compose(odometry, Pose2(0.25, 0.0, 0.0));
     }
     const Pose2 last_odometry = compose(odometry, Pose2(-0.25, 0.0, 0.0));
@@ -274,6 +276,37 @@ TEST(ScanMatchingOdometry, AMatchTheWheelsCannotExplainIsRefused) {
     } else {
       EXPECT_EQ(matcher.counters().refused, 0);
       EXPECT_LT(std::abs(corrected.x), 0.05);
+    }
+  }
+}
+
+// A log whose clock steps back (Intel's does): the scan is stamped before
+// the previous one, so the odometry looked up at its stamp is where the
+// robot was earlier, 0.4 m behind, while the robot really stood still. That
+// increment is not the step's: the match (no motion) is taken, and counted
+// as not checked. The same disagreement with increasing stamps is refused.
+TEST(ScanMatchingOdometry, AScanStampedBeforeThePreviousIsNotCheckedAgainstTheWheels) {
+  const sim::PolygonWorld world = room();
+  for (const bool back : {true, false}) {
+    std::mt19937 rng(9);
+    ScanMatchingOdometry matcher{ScanMatcherOptions()};
+    Scan first = sweep(world, Pose2(), Pose2(), &rng);
+    first.stamp = 10.0;
+    matcher.process(first, Pose2(0.4, 0.0, 0.0), Pose2());
+    Scan second = sweep(world, Pose2(), Pose2(), &rng);
+    second.stamp = back ? 8.0 : 12.0;
+    MatchResult result;
+    const Pose2 corrected = matcher.process(second, Pose2(), Pose2(), &result);
+    if (back) {
+      EXPECT_TRUE(result.ok) << result.message;
+      EXPECT_EQ(matcher.counters().unchecked_by_odometry, 1);
+      EXPECT_EQ(matcher.counters().refused_by_odometry, 0);
+      EXPECT_NEAR(corrected.x, 0.4, 0.02);  // stood still, where the first scan was
+    } else {
+      EXPECT_FALSE(result.ok);
+      EXPECT_EQ(matcher.counters().unchecked_by_odometry, 0);
+      EXPECT_EQ(matcher.counters().refused_by_odometry, 1);
+      EXPECT_NEAR(corrected.x, 0.0, 1e-9);  // the wheels' increment
     }
   }
 }

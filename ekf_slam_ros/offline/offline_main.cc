@@ -500,7 +500,10 @@ int main(int argc, char** argv) {
                        std::to_string(c.scan_match_refusals) +
                        " fell back to the odometry increment (" +
                        std::to_string(c.scan_match_odometry_refusals) +
-                       " of them disagreed with the wheels)"
+                       " of them disagreed with the wheels), " +
+                       std::to_string(c.scan_match_unchecked) +
+                       " matches not checked against the wheels (stamp not after the "
+                       "previous scan's)"
                  : std::string("off (raw odometry is the control)"))
          << "\n"
          << "loop closure: " << loopClosureLine(pipeline.loopCloser())
