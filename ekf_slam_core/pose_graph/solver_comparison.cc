@@ -25,7 +25,7 @@
 // levenberg_marquardt.h with the same c, so Σ ρ matches term for term.
 #include <ceres/ceres.h>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -46,11 +46,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// S with Sᵀ S = Ω (the symmetric part: eᵀ Ω e only sees that).
+// S with Sᵀ S = Ω (the symmetric part: eᵀ Ω e only sees that). From the
+// eigen-decomposition, S = D^½ Vᵀ, so that a semi-definite Ω (a heading
+// edge informs the heading alone: diag(0, 0, w)) gets its square root too;
+// a Cholesky factor would stop at the first zero pivot.
 template <int N>
 Eigen::Matrix<double, N, N> squareRootInformation(const Eigen::Matrix<double, N, N>& omega) {
   const Eigen::Matrix<double, N, N> symmetric = 0.5 * (omega + omega.transpose());
-  return Eigen::LLT<Eigen::Matrix<double, N, N>>(symmetric).matrixU();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(symmetric);
+  const Eigen::Matrix<double, N, 1> root = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return root.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
 Pose2 poseOf(const double* p) { return Pose2(p[0], p[1], p[2]); }
