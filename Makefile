@@ -62,10 +62,8 @@ test: build check
 demo: build
 	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/ci/run_demo.sh $(OUT)
 
-# Ceres only for the solver comparison (docs/solvers.md): installed here,
-# not by `make deps`, so that build, test and demo do without it.
 bench:
-	@tools/ci/install_deps.sh libceres-dev
+	@tools/ci/install_deps.sh
 	@mkdir -p $(BENCH_WS)/src $(OUT)/bench
 	@if [ ! -e $(BENCH_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(BENCH_WS)/src/ekf_slam; fi
 	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \

@@ -212,6 +212,7 @@ class NormalEquations {
 }  // namespace
 
 LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options) {
+  if (options.solver == "ceres") return optimizeWithCeres(options);
   LandmarkGraphSummary summary;
   const double c = options.kernel_width;
   summary.initial_cost = summary.final_cost = cost(c);

@@ -262,6 +262,46 @@ TEST(LandmarkGraph, MatchesADenseGaussNewtonSolve) {
   EXPECT_NEAR(graph.cost(3.0), residual(v).squaredNorm(), 1e-9);
 }
 
+// Ceres (solver: ceres) on the exact problem ends at the truth too, and on
+// the noisy one at the hand-written solver's optimum.
+TEST(LandmarkGraph, CeresReachesTheSameOptimum) {
+  ExactProblem p;
+  ASSERT_TRUE(p.measured);
+  const std::vector<Vector2> start = {Vector2(1.0, 2.5), Vector2(3.4, -0.6)};
+  LandmarkGraphOptions options;
+  options.solver = "ceres";
+  LandmarkGraph exact = buildGraph(p.truth, p.motion, p.z, p.poses, start);
+  const LandmarkGraphSummary summary = exact.optimize(options);
+  EXPECT_TRUE(summary.converged);
+  EXPECT_LT(summary.final_cost, 1e-10);
+  for (size_t i = 0; i < p.truth.poses.size(); ++i) {
+    EXPECT_LT((exact.poses()[i].vector() - p.truth.poses[i].vector()).norm(), 1e-5);
+  }
+  EXPECT_EQ(exact.poses()[0].vector(), p.truth.poses[0].vector());  // fixed
+
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<RangeBearing> noisy = p.z;
+  for (RangeBearing& r : noisy) {
+    r.range += 0.02 * n(rng);
+    r.bearing += 0.01 * n(rng);
+  }
+  std::vector<LandmarkGraph> solved;
+  for (const char* solver : {"levenberg_marquardt", "ceres"}) {
+    options.solver = solver;
+    options.min_relative_decrease = 1e-12;
+    solved.push_back(buildGraph(p.truth, p.motion, noisy, p.poses, start));
+    EXPECT_TRUE(solved.back().optimize(options).converged) << solver;
+  }
+  EXPECT_NEAR(solved[0].cost(3.0), solved[1].cost(3.0), 1e-6 * solved[0].cost(3.0));
+  for (size_t i = 0; i < p.truth.poses.size(); ++i) {
+    EXPECT_LT((solved[0].poses()[i].vector() - solved[1].poses()[i].vector()).norm(), 1e-5);
+  }
+  for (size_t j = 0; j < p.truth.landmarks.size(); ++j) {
+    EXPECT_LT((solved[0].landmarks()[j] - solved[1].landmarks()[j]).norm(), 1e-5);
+  }
+}
+
 TEST(LandmarkGraph, HuberKernelBoundsTheInfluenceOfAWrongObservation) {
   // Five poses see one landmark; one sighting is 1 m off. Without a kernel
   // it drags the landmark by decimetres; with Huber much less.

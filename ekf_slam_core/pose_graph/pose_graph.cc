@@ -77,6 +77,7 @@ double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) con
 }
 
 PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
+  if (options.solver == "ceres") return optimizeWithCeres(options);
   PoseGraphSummary summary;
   const double c = options.robust_kernel_width;
   summary.initial_cost = summary.final_cost = cost(poses_, c);

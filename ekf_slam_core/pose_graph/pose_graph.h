@@ -37,6 +37,11 @@ struct PoseGraphEdge {
 };
 
 struct PoseGraphOptions {
+  // levenberg_marquardt: the hand-written solver described above; ceres:
+  // Ceres's Levenberg–Marquardt (ceres_solve.cc; it stops once a step lowers
+  // the cost by less than 1e-6 of it, convergence_step unused). Why the
+  // default is not Ceres: docs/solvers.md.
+  std::string solver = "levenberg_marquardt";
   int max_iterations = 20;         // Levenberg-Marquardt steps per optimize()
   double convergence_step = 1e-6;  // m or rad: a smaller largest step component ends it
   double robust_kernel_width =
@@ -45,6 +50,7 @@ struct PoseGraphOptions {
 
   template <class Visitor>
   void visitFields(Visitor& v) {
+    v.text("solver", solver, {"ceres", "levenberg_marquardt"});
     v.integer("max_iterations", max_iterations, Bounds::closed(1, 10000));
     v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
     v.number("robust_kernel_width", robust_kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
@@ -90,6 +96,7 @@ class PoseGraph {
 
  private:
   double cost(const std::vector<Pose2>& poses, double kernel_width) const;
+  PoseGraphSummary optimizeWithCeres(const PoseGraphOptions& options);  // ceres_solve.cc
 
   std::vector<Pose2> poses_;
   std::vector<PoseGraphEdge> edges_;

@@ -159,11 +159,48 @@ TEST(PoseGraph, CauchyKernelDownweightsAFalseLoop) {
   EXPECT_GT(largestError(plain.graph, plain.truth), 1.0);
 }
 
+// Ceres (solver: ceres) and the hand-written solver on the same noisy
+// two-lap graph with its false loop, plus heading-only edges (information
+// diag(0, 0, w), semi-definite: no Cholesky factor) between the laps: both
+// reach the same minimum, and the false loop is down-weighted by both.
+TEST(PoseGraph, CeresAndTheHandWrittenSolverReachTheSameMinimum) {
+  PoseGraphOptions options;
+  options.max_iterations = 100;
+  std::vector<NoisyLoops> solved;
+  for (const char* solver : {"levenberg_marquardt", "ceres"}) {
+    NoisyLoops loops = noisyLoopsWithAFalseOne(/*robust_false_loop=*/true);
+    for (int i = 31; i < 60; i += 3) {
+      PoseGraphEdge heading;
+      heading.from = i - 30;
+      heading.to = i;
+      heading.information = Vector3(0.0, 0.0, 1.0 / (0.01 * 0.01)).asDiagonal();
+      heading.robust = true;
+      loops.graph.addEdge(heading);
+    }
+    options.solver = solver;
+    const PoseGraphSummary summary = loops.graph.optimize(options);
+    EXPECT_TRUE(summary.converged) << solver;
+    EXPECT_LT(summary.final_cost, summary.initial_cost) << solver;
+    EXPECT_LT(largestError(loops.graph, loops.truth), 0.25) << solver;
+    EXPECT_LT(loops.graph.edgeWeight(loops.false_edge, options.robust_kernel_width), 1e-3)
+        << solver;
+    solved.push_back(std::move(loops));
+  }
+  for (int i = 0; i < solved[0].graph.nodeCount(); ++i) {
+    const Pose2 d = between(solved[0].graph.pose(i), solved[1].graph.pose(i));
+    EXPECT_LT(std::hypot(d.x, d.y), 1e-4) << "node " << i;
+    EXPECT_LT(std::abs(d.theta), 1e-5) << "node " << i;
+  }
+}
+
 TEST(PoseGraphOptions, ValidateNamesTheBadField) {
   PoseGraphOptions options;
   EXPECT_EQ(options.validate(), "");
   options.robust_kernel_width = 0.0;
   EXPECT_NE(options.validate().find("robust_kernel_width"), std::string::npos);
+  options = PoseGraphOptions();
+  options.solver = "gauss_newton";
+  EXPECT_NE(options.validate().find("solver"), std::string::npos);
 }
 
 }  // namespace

@@ -25,7 +25,6 @@
 // levenberg_marquardt.h with the same c, so Σ ρ matches term for term.
 #include <ceres/ceres.h>
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -39,6 +38,7 @@
 #include <vector>
 
 #include "ekf_slam_core/io/trajectory_file.h"
+#include "ekf_slam_core/pose_graph/ceres_costs.h"
 #include "ekf_slam_core/pose_graph/graph_io.h"
 
 namespace ekf_slam {
@@ -46,116 +46,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// S with Sᵀ S = Ω (the symmetric part: eᵀ Ω e only sees that). From the
-// eigen-decomposition, S = D^½ Vᵀ, so that a semi-definite Ω (a heading
-// edge informs the heading alone: diag(0, 0, w)) gets its square root too;
-// a Cholesky factor would stop at the first zero pivot.
-template <int N>
-Eigen::Matrix<double, N, N> squareRootInformation(const Eigen::Matrix<double, N, N>& omega) {
-  const Eigen::Matrix<double, N, N> symmetric = 0.5 * (omega + omega.transpose());
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(symmetric);
-  const Eigen::Matrix<double, N, 1> root = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return root.asDiagonal() * eigen.eigenvectors().transpose();
-}
-
-Pose2 poseOf(const double* p) { return Pose2(p[0], p[1], p[2]); }
-
-// A relative-pose edge (PoseGraph's when the offsets are identities and
-// `plain` is set: then edgeError itself, bit for bit the hand-written error).
-class RelativePoseCost : public ceres::SizedCostFunction<3, 3, 3> {
- public:
-  RelativePoseCost(const RelativePoseEdge& edge, bool plain)
-      : edge_(edge), plain_(plain), sqrt_information_(squareRootInformation<3>(edge.information)) {}
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    Matrix3 J_from, J_to;
-    const Pose2 from = poseOf(parameters[0]), to = poseOf(parameters[1]);
-    const Vector3 e = plain_ ? edgeError(from, to, edge_.measurement, &J_from, &J_to)
-                             : relativePoseError(from, to, edge_, &J_from, &J_to);
-    Eigen::Map<Vector3>{residuals} = sqrt_information_ * e;
-    using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
-    if (jacobians && jacobians[0]) Eigen::Map<RowMajor3>{jacobians[0]} = sqrt_information_ * J_from;
-    if (jacobians && jacobians[1]) Eigen::Map<RowMajor3>{jacobians[1]} = sqrt_information_ * J_to;
-    return true;
-  }
-
- private:
-  RelativePoseEdge edge_;
-  bool plain_;
-  Matrix3 sqrt_information_;
-};
-
-class PosePriorCost : public ceres::SizedCostFunction<3, 3> {
- public:
-  explicit PosePriorCost(const PosePriorEdge& edge)
-      : mean_(edge.mean), sqrt_information_(squareRootInformation<3>(edge.information)) {}
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    Vector3 e = poseOf(parameters[0]).vector() - mean_.vector();
-    e(2) = wrapAngle(e(2));
-    Eigen::Map<Vector3>{residuals} = sqrt_information_ * e;
-    if (jacobians && jacobians[0]) {
-      Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>{jacobians[0]} = sqrt_information_;
-    }
-    return true;
-  }
-
- private:
-  Pose2 mean_;
-  Matrix3 sqrt_information_;
-};
-
-// A landmark at the sensor origin has no bearing: the hand-written cost
-// leaves such a term out, here it is a zero residual.
-class ObservationCost : public ceres::SizedCostFunction<2, 3, 2> {
- public:
-  ObservationCost(const ObservationEdge& edge, const Pose2& laser)
-      : z_(edge.z), laser_(laser), sqrt_information_(squareRootInformation<2>(edge.information)) {}
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    Vector2 e = Vector2::Zero();
-    Matrix23 J_robot = Matrix23::Zero();
-    Matrix2 J_landmark = Matrix2::Zero();
-    observationError(poseOf(parameters[0]), laser_, Vector2(parameters[1][0], parameters[1][1]), z_,
-                     &e, &J_robot, &J_landmark);
-    Eigen::Map<Vector2>{residuals} = sqrt_information_ * e;
-    if (jacobians && jacobians[0]) {
-      Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>>{jacobians[0]} =
-          sqrt_information_ * J_robot;
-    }
-    if (jacobians && jacobians[1]) {
-      Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>>{jacobians[1]} =
-          sqrt_information_ * J_landmark;
-    }
-    return true;
-  }
-
- private:
-  RangeBearing z_;
-  Pose2 laser_;
-  Matrix2 sqrt_information_;
-};
-
-// The problem owns the kernels it is given; one instance per kind, shared.
-struct Kernels {
-  explicit Kernels(double c) : cauchy(new ceres::CauchyLoss(c)), huber(new ceres::HuberLoss(c)) {}
-  ceres::LossFunction* of(RobustKernel kernel) const {
-    switch (kernel) {
-      case RobustKernel::kNone:
-        return nullptr;
-      case RobustKernel::kHuber:
-        return huber;
-      case RobustKernel::kCauchy:
-        return cauchy;
-    }
-    return nullptr;
-  }
-  ceres::LossFunction* cauchy;
-  ceres::LossFunction* huber;
-};
+using ceres_costs::ObservationCost;
+using ceres_costs::PosePriorCost;
+using ceres_costs::RelativePoseCost;
 
 struct CeresVariant {
   std::string name;
@@ -218,8 +111,10 @@ Outcome solvePoseGraphByHand(const PoseGraph& problem, const PoseGraphOptions& o
   best.solver = name;
   for (int run = 0; run < repeats; ++run) {
     PoseGraph graph = problem;
+    PoseGraphOptions by_hand = options;
+    by_hand.solver = "levenberg_marquardt";
     const auto start = Clock::now();
-    const PoseGraphSummary summary = graph.optimize(options);
+    const PoseGraphSummary summary = graph.optimize(by_hand);
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
@@ -240,25 +135,23 @@ Outcome solvePoseGraphWithCeres(const PoseGraph& graph, const PoseGraphOptions& 
       x[i] = {graph.pose(i).x, graph.pose(i).y, graph.pose(i).theta};
     }
     const auto start = Clock::now();
-    ceres::Problem problem;
-    const Kernels kernels(graph_options.robust_kernel_width);
-    bool cauchy_used = false;
+    ceres_costs::Kernels kernels(graph_options.robust_kernel_width);
+    ceres::Problem::Options problem_options;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
     for (const PoseGraphEdge& edge : graph.edges()) {
       if (!edge.active) continue;
       RelativePoseEdge relative;
       relative.measurement = edge.measurement;
       relative.information = edge.information;
-      cauchy_used |= edge.robust;
       problem.AddResidualBlock(new RelativePoseCost(relative, true),
-                               edge.robust ? kernels.cauchy : nullptr, x[edge.from].data(),
-                               x[edge.to].data());
+                               edge.robust ? kernels.of(RobustKernel::kCauchy) : nullptr,
+                               x[edge.from].data(), x[edge.to].data());
     }
     if (problem.HasParameterBlock(x[0].data())) problem.SetParameterBlockConstant(x[0].data());
     ceres::Solver::Summary summary;
     ceres::Solve(solverOptions(variant, graph_options.initial_lambda), &problem, &summary);
     const double seconds = secondsSince(start);
-    if (!cauchy_used) delete kernels.cauchy;
-    delete kernels.huber;
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
     best.termination = ceres::TerminationTypeToString(summary.termination_type);
@@ -289,8 +182,10 @@ Outcome solveLandmarkGraphByHand(const LandmarkGraph& problem, const LandmarkGra
   best.solver = name;
   for (int run = 0; run < repeats; ++run) {
     LandmarkGraph graph = problem;
+    LandmarkGraphOptions by_hand = options;
+    by_hand.solver = "levenberg_marquardt";
     const auto start = Clock::now();
-    const LandmarkGraphSummary summary = graph.optimize(options);
+    const LandmarkGraphSummary summary = graph.optimize(by_hand);
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
@@ -318,13 +213,11 @@ Outcome solveLandmarkGraphWithCeres(const LandmarkGraph& graph,
       m[j] = {graph.landmarks()[j].x(), graph.landmarks()[j].y()};
     }
     const auto start = Clock::now();
-    ceres::Problem problem;
-    const Kernels kernels(graph_options.kernel_width);
-    bool used[3] = {false, false, false};
-    auto kernel = [&](RobustKernel k) {
-      used[static_cast<int>(k)] = true;
-      return kernels.of(k);
-    };
+    ceres_costs::Kernels kernels(graph_options.kernel_width);
+    ceres::Problem::Options problem_options;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    auto kernel = [&](RobustKernel k) { return kernels.of(k); };
     for (const RelativePoseEdge& e : graph.relativeEdges()) {
       problem.AddResidualBlock(new RelativePoseCost(e, false), kernel(e.kernel), x[e.from].data(),
                                x[e.to].data());
@@ -356,8 +249,6 @@ Outcome solveLandmarkGraphWithCeres(const LandmarkGraph& graph,
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
     const double seconds = secondsSince(start);
-    if (!used[static_cast<int>(RobustKernel::kCauchy)]) delete kernels.cauchy;
-    if (!used[static_cast<int>(RobustKernel::kHuber)]) delete kernels.huber;
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
     best.termination = ceres::TerminationTypeToString(summary.termination_type);

@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages this project needs, only when one is missing.
 # Idempotent and silent when everything is present. Needs root (or sudo).
-# Extra packages a target needs (clang for `make fuzz`, libceres-dev for
-# `make bench`) come as arguments.
+# Extra packages a target needs (clang for `make fuzz`) come as arguments.
 set -euo pipefail
 
 PACKAGES=(
@@ -25,6 +24,7 @@ PACKAGES=(
   python3-rosdep2
   # libraries
   libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
+  libceres-dev
   # figures
   python3-matplotlib python3-numpy python3-yaml
   # rviz (sim.launch rviz:=true) and its headless smoke test / screenshot

@@ -22,7 +22,7 @@ cpu=${CPU:-1}
 # One thread everywhere: Ceres is told so, the BLAS under CHOLMOD too.
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 
-"$root/tools/ci/install_deps.sh" libceres-dev
+"$root/tools/ci/install_deps.sh"
 
 mkdir -p "$ws/src" "$out"
 if [ ! -e "$ws/src/ekf_slam" ]; then ln -s "$root" "$ws/src/ekf_slam"; fi

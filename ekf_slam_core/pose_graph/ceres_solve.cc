@@ -1,0 +1,132 @@
+// PoseGraph::optimize and LandmarkGraph::optimize with Ceres (options
+// solver: ceres): Levenberg–Marquardt trust region over the cost functions
+// of ceres_costs.h, sparse Cholesky of the normal equations (SuiteSparse's
+// CHOLMOD), one thread. docs/solvers.md compares it with the hand-written
+// solver on the real logs' problems.
+#include <ceres/ceres.h>
+
+#include <array>
+#include <vector>
+
+#include "ekf_slam_core/pose_graph/ceres_costs.h"
+#include "ekf_slam_core/pose_graph/landmark_graph.h"
+#include "ekf_slam_core/pose_graph/pose_graph.h"
+
+namespace ekf_slam {
+namespace {
+
+ceres::Solver::Options solverOptions(int max_iterations, double function_tolerance,
+                                     double initial_lambda) {
+  ceres::Solver::Options options;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  options.max_num_iterations = max_iterations;
+  options.function_tolerance = function_tolerance;
+  // The same first damping: Ceres's LM adds diag(JᵀJ) / radius.
+  if (initial_lambda > 0.0) options.initial_trust_region_radius = 1.0 / initial_lambda;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  return options;
+}
+
+ceres::Problem::Options problemOptions() {
+  ceres::Problem::Options options;
+  options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // ceres_costs::Kernels has them
+  return options;
+}
+
+int stepsOf(const ceres::Solver::Summary& summary) {
+  return summary.num_successful_steps + summary.num_unsuccessful_steps;
+}
+
+}  // namespace
+
+PoseGraphSummary PoseGraph::optimizeWithCeres(const PoseGraphOptions& options) {
+  PoseGraphSummary summary;
+  summary.initial_cost = summary.final_cost = cost(poses_, options.robust_kernel_width);
+  if (nodeCount() <= 1) {
+    summary.converged = true;
+    return summary;
+  }
+  std::vector<std::array<double, 3>> x(poses_.size());
+  for (size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
+  ceres_costs::Kernels kernels(options.robust_kernel_width);
+  ceres::Problem problem(problemOptions());
+  for (const PoseGraphEdge& edge : edges_) {
+    if (!edge.active) continue;
+    RelativePoseEdge relative;
+    relative.measurement = edge.measurement;
+    relative.information = edge.information;
+    problem.AddResidualBlock(new ceres_costs::RelativePoseCost(relative, true),
+                             edge.robust ? kernels.of(RobustKernel::kCauchy) : nullptr,
+                             x[edge.from].data(), x[edge.to].data());
+  }
+  if (problem.NumResidualBlocks() == 0) {
+    summary.converged = true;
+    return summary;
+  }
+  if (problem.HasParameterBlock(x[0].data())) problem.SetParameterBlockConstant(x[0].data());
+  ceres::Solver::Summary result;
+  // Ceres's own stop: a step lowering the cost by less than 1e-6 of it.
+  ceres::Solve(solverOptions(options.max_iterations, 1e-6, options.initial_lambda), &problem,
+               &result);
+  for (size_t i = 1; i < poses_.size(); ++i)
+    poses_[i] = Pose2(x[i][0], x[i][1], wrapAngle(x[i][2]));
+  summary.iterations = stepsOf(result);
+  summary.final_cost = cost(poses_, options.robust_kernel_width);
+  summary.converged = result.termination_type == ceres::CONVERGENCE;
+  return summary;
+}
+
+LandmarkGraphSummary LandmarkGraph::optimizeWithCeres(const LandmarkGraphOptions& options) {
+  LandmarkGraphSummary summary;
+  summary.initial_cost = summary.final_cost = cost(options.kernel_width);
+  std::vector<std::array<double, 3>> x(poses_.size());
+  std::vector<std::array<double, 2>> m(landmarks_.size());
+  for (size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
+  for (size_t j = 0; j < landmarks_.size(); ++j) m[j] = {landmarks_[j].x(), landmarks_[j].y()};
+  ceres_costs::Kernels kernels(options.kernel_width);
+  ceres::Problem problem(problemOptions());
+  for (const RelativePoseEdge& e : relatives_) {
+    problem.AddResidualBlock(new ceres_costs::RelativePoseCost(e, false), kernels.of(e.kernel),
+                             x[e.from].data(), x[e.to].data());
+  }
+  for (const PosePriorEdge& e : priors_) {
+    problem.AddResidualBlock(new ceres_costs::PosePriorCost(e), nullptr, x[e.pose].data());
+  }
+  for (const ObservationEdge& e : observations_) {
+    problem.AddResidualBlock(new ceres_costs::ObservationCost(e, laser_), kernels.of(e.kernel),
+                             x[e.pose].data(), m[e.landmark].data());
+  }
+  bool free_unknowns = false;
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    if (!problem.HasParameterBlock(x[i].data())) continue;
+    if (fixed_[i]) {
+      problem.SetParameterBlockConstant(x[i].data());
+    } else {
+      free_unknowns = true;
+    }
+  }
+  for (auto& landmark : m) free_unknowns |= problem.HasParameterBlock(landmark.data());
+  if (!free_unknowns) {
+    summary.converged = true;
+    return summary;
+  }
+  ceres::Solver::Summary result;
+  ceres::Solve(
+      solverOptions(options.max_iterations, options.min_relative_decrease, options.initial_lambda),
+      &problem, &result);
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    if (!fixed_[i]) poses_[i] = Pose2(x[i][0], x[i][1], wrapAngle(x[i][2]));
+  }
+  for (size_t j = 0; j < landmarks_.size(); ++j) landmarks_[j] = Vector2(m[j][0], m[j][1]);
+  summary.iterations = stepsOf(result);
+  summary.symbolic_analyses = 1;
+  summary.final_cost = cost(options.kernel_width);
+  summary.converged = result.termination_type == ceres::CONVERGENCE;
+  return summary;
+}
+
+}  // namespace ekf_slam
