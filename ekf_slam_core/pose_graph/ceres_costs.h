@@ -10,6 +10,8 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Eigenvalues>
+#include <array>
+#include <vector>
 
 #include "ekf_slam_core/pose_graph/landmark_graph.h"
 #include "ekf_slam_core/pose_graph/pose_graph.h"
@@ -129,6 +131,18 @@ struct Kernels {
   ceres::CauchyLoss cauchy;
   ceres::HuberLoss huber;
 };
+
+// The problems, built once for the pipeline (ceres_solve.cc) and the solver
+// comparison alike. Each unknown is an array (pose: x, y, θ; landmark: x, y)
+// the caller fills with the start and reads back; loss functions come from
+// `kernels` (the problem must not own them: DO_NOT_TAKE_OWNERSHIP).
+// Every active edge of `graph`; node 0 held constant.
+void addPoseGraph(const PoseGraph& graph, Kernels* kernels,
+                  std::vector<std::array<double, 3>>* poses, ceres::Problem* problem);
+// Every edge of `graph`; its fixed poses held constant.
+void addLandmarkGraph(const LandmarkGraph& graph, Kernels* kernels,
+                      std::vector<std::array<double, 3>>* poses,
+                      std::vector<std::array<double, 2>>* landmarks, ceres::Problem* problem);
 
 }  // namespace ceres_costs
 }  // namespace ekf_slam

@@ -43,6 +43,48 @@ int stepsOf(const ceres::Solver::Summary& summary) {
 
 }  // namespace
 
+namespace ceres_costs {
+
+void addPoseGraph(const PoseGraph& graph, Kernels* kernels,
+                  std::vector<std::array<double, 3>>* poses, ceres::Problem* problem) {
+  std::vector<std::array<double, 3>>& x = *poses;
+  for (const PoseGraphEdge& edge : graph.edges()) {
+    if (!edge.active) continue;
+    RelativePoseEdge relative;
+    relative.measurement = edge.measurement;
+    relative.information = edge.information;
+    problem->AddResidualBlock(new RelativePoseCost(relative, true),
+                              edge.robust ? kernels->of(RobustKernel::kCauchy) : nullptr,
+                              x[edge.from].data(), x[edge.to].data());
+  }
+  if (problem->HasParameterBlock(x[0].data())) problem->SetParameterBlockConstant(x[0].data());
+}
+
+void addLandmarkGraph(const LandmarkGraph& graph, Kernels* kernels,
+                      std::vector<std::array<double, 3>>* poses,
+                      std::vector<std::array<double, 2>>* landmarks, ceres::Problem* problem) {
+  std::vector<std::array<double, 3>>& x = *poses;
+  std::vector<std::array<double, 2>>& m = *landmarks;
+  for (const RelativePoseEdge& e : graph.relativeEdges()) {
+    problem->AddResidualBlock(new RelativePoseCost(e, false), kernels->of(e.kernel),
+                              x[e.from].data(), x[e.to].data());
+  }
+  for (const PosePriorEdge& e : graph.priorEdges()) {
+    problem->AddResidualBlock(new PosePriorCost(e), nullptr, x[e.pose].data());
+  }
+  for (const ObservationEdge& e : graph.observationEdges()) {
+    problem->AddResidualBlock(new ObservationCost(e, graph.laserPose()), kernels->of(e.kernel),
+                              x[e.pose].data(), m[e.landmark].data());
+  }
+  for (int i = 0; i < graph.poseCount(); ++i) {
+    if (graph.isFixed(i) && problem->HasParameterBlock(x[i].data())) {
+      problem->SetParameterBlockConstant(x[i].data());
+    }
+  }
+}
+
+}  // namespace ceres_costs
+
 PoseGraphSummary PoseGraph::optimizeWithCeres(const PoseGraphOptions& options) {
   PoseGraphSummary summary;
   summary.initial_cost = summary.final_cost = cost(poses_, options.robust_kernel_width);
@@ -54,20 +96,11 @@ PoseGraphSummary PoseGraph::optimizeWithCeres(const PoseGraphOptions& options) {
   for (size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
   ceres_costs::Kernels kernels(options.robust_kernel_width);
   ceres::Problem problem(problemOptions());
-  for (const PoseGraphEdge& edge : edges_) {
-    if (!edge.active) continue;
-    RelativePoseEdge relative;
-    relative.measurement = edge.measurement;
-    relative.information = edge.information;
-    problem.AddResidualBlock(new ceres_costs::RelativePoseCost(relative, true),
-                             edge.robust ? kernels.of(RobustKernel::kCauchy) : nullptr,
-                             x[edge.from].data(), x[edge.to].data());
-  }
+  ceres_costs::addPoseGraph(*this, &kernels, &x, &problem);
   if (problem.NumResidualBlocks() == 0) {
     summary.converged = true;
     return summary;
   }
-  if (problem.HasParameterBlock(x[0].data())) problem.SetParameterBlockConstant(x[0].data());
   ceres::Solver::Summary result;
   // Ceres's own stop: a step lowering the cost by less than 1e-6 of it.
   ceres::Solve(solverOptions(options.max_iterations, 1e-6, options.initial_lambda), &problem,
@@ -89,25 +122,11 @@ LandmarkGraphSummary LandmarkGraph::optimizeWithCeres(const LandmarkGraphOptions
   for (size_t j = 0; j < landmarks_.size(); ++j) m[j] = {landmarks_[j].x(), landmarks_[j].y()};
   ceres_costs::Kernels kernels(options.kernel_width);
   ceres::Problem problem(problemOptions());
-  for (const RelativePoseEdge& e : relatives_) {
-    problem.AddResidualBlock(new ceres_costs::RelativePoseCost(e, false), kernels.of(e.kernel),
-                             x[e.from].data(), x[e.to].data());
-  }
-  for (const PosePriorEdge& e : priors_) {
-    problem.AddResidualBlock(new ceres_costs::PosePriorCost(e), nullptr, x[e.pose].data());
-  }
-  for (const ObservationEdge& e : observations_) {
-    problem.AddResidualBlock(new ceres_costs::ObservationCost(e, laser_), kernels.of(e.kernel),
-                             x[e.pose].data(), m[e.landmark].data());
-  }
+  ceres_costs::addLandmarkGraph(*this, &kernels, &x, &m, &problem);
   bool free_unknowns = false;
-  for (size_t i = 0; i < poses_.size(); ++i) {
-    if (!problem.HasParameterBlock(x[i].data())) continue;
-    if (fixed_[i]) {
-      problem.SetParameterBlockConstant(x[i].data());
-    } else {
-      free_unknowns = true;
-    }
+  for (auto& pose : x) {
+    free_unknowns |=
+        problem.HasParameterBlock(pose.data()) && !problem.IsParameterBlockConstant(pose.data());
   }
   for (auto& landmark : m) free_unknowns |= problem.HasParameterBlock(landmark.data());
   if (!free_unknowns) {

@@ -46,10 +46,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-using ceres_costs::ObservationCost;
-using ceres_costs::PosePriorCost;
-using ceres_costs::RelativePoseCost;
-
 struct CeresVariant {
   std::string name;
   ceres::LinearSolverType linear_solver;
@@ -139,16 +135,7 @@ Outcome solvePoseGraphWithCeres(const PoseGraph& graph, const PoseGraphOptions& 
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
-    for (const PoseGraphEdge& edge : graph.edges()) {
-      if (!edge.active) continue;
-      RelativePoseEdge relative;
-      relative.measurement = edge.measurement;
-      relative.information = edge.information;
-      problem.AddResidualBlock(new RelativePoseCost(relative, true),
-                               edge.robust ? kernels.of(RobustKernel::kCauchy) : nullptr,
-                               x[edge.from].data(), x[edge.to].data());
-    }
-    if (problem.HasParameterBlock(x[0].data())) problem.SetParameterBlockConstant(x[0].data());
+    ceres_costs::addPoseGraph(graph, &kernels, &x, &problem);
     ceres::Solver::Summary summary;
     ceres::Solve(solverOptions(variant, graph_options.initial_lambda), &problem, &summary);
     const double seconds = secondsSince(start);
@@ -217,23 +204,7 @@ Outcome solveLandmarkGraphWithCeres(const LandmarkGraph& graph,
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
-    auto kernel = [&](RobustKernel k) { return kernels.of(k); };
-    for (const RelativePoseEdge& e : graph.relativeEdges()) {
-      problem.AddResidualBlock(new RelativePoseCost(e, false), kernel(e.kernel), x[e.from].data(),
-                               x[e.to].data());
-    }
-    for (const PosePriorEdge& e : graph.priorEdges()) {
-      problem.AddResidualBlock(new PosePriorCost(e), nullptr, x[e.pose].data());
-    }
-    for (const ObservationEdge& e : graph.observationEdges()) {
-      problem.AddResidualBlock(new ObservationCost(e, graph.laserPose()), kernel(e.kernel),
-                               x[e.pose].data(), m[e.landmark].data());
-    }
-    for (int i = 0; i < graph.poseCount(); ++i) {
-      if (graph.isFixed(i) && problem.HasParameterBlock(x[i].data())) {
-        problem.SetParameterBlockConstant(x[i].data());
-      }
-    }
+    ceres_costs::addLandmarkGraph(graph, &kernels, &x, &m, &problem);
     ceres::Solver::Options options = solverOptions(variant, graph_options.initial_lambda);
     if (variant.landmarks_first) {
       auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
