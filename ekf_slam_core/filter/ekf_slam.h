@@ -26,6 +26,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <cassert>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -130,8 +131,15 @@ class EkfSlam {
  public:
   static constexpr int kPoseDim = 3;
   static constexpr int kPointDim = 2;
-  int landmarkIndex(int slot) const { return landmarks_[slot].index; }
-  LandmarkKind landmarkKind(int slot) const { return landmarks_[slot].kind; }
+  // A slot must name a landmark in the state (slotOf() >= 0).
+  int landmarkIndex(int slot) const {
+    assert(slot >= 0 && slot < landmarkCount());
+    return landmarks_[slot].index;
+  }
+  LandmarkKind landmarkKind(int slot) const {
+    assert(slot >= 0 && slot < landmarkCount());
+    return landmarks_[slot].kind;
+  }
 
   // Options must be valid (check options.validate() first); the initial
   // covariance must be symmetric PSD.

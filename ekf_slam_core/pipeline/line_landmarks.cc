@@ -123,12 +123,14 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
                             const std::vector<int>& observation_feature,
                             const IterationReport& points, LineIterationReport* out) {
   LineIterationReport& report = *out;
-  // Point merges of this scan: endpoint ids follow their survivors.
-  for (const auto& [kept, dropped] : points.merged) {
-    for (auto& entry : tracks_) {
-      for (int& e : entry.second.endpoint_ids) {
+  // The point step of this scan merged and pruned point landmarks: endpoint
+  // ids follow their survivors, and those of pruned landmarks are cleared.
+  for (auto& entry : tracks_) {
+    for (int& e : entry.second.endpoint_ids) {
+      for (const auto& [kept, dropped] : points.merged) {
         if (e == dropped) e = kept;
       }
+      if (e >= 0 && filter.slotOf(e) < 0) e = -1;
     }
   }
 

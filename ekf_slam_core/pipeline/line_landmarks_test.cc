@@ -227,6 +227,61 @@ TEST(LineLandmarks, AWallSeenEndOnLeavesAValidFilter) {
   }
 }
 
+// A corner at a wall's end seen once (tentative) becomes an endpoint of a
+// θ-only wall and is pruned in the scan that gives the wall's other end: the
+// wall forgets the pruned corner and takes the new one, and nothing reads a
+// landmark that has left the filter.
+TEST(LineLandmarks, AnEndpointPrunedInTheSameScanIsForgotten) {
+  PipelineOptions options = lineOptions(LandmarkSet::kPointsAndLineAngles, Pose2());
+  options.filter.tentative_max_age = 3;
+  SlamPipeline pipeline(options);
+  // The robot drives along x beside the wall y = 2, x from 0.5 to 4.5 (map
+  // frame); the corner at x = 0.5 is seen in the first scan only, the
+  // corner at x = 4.5 in the scan at which the first is pruned.
+  auto corner = [](const Vector2& at) {
+    PointFeature point;
+    point.kind = PointKind::kCorner;
+    point.landmark_candidate = true;
+    point.position = at;
+    point.range = at.norm();
+    point.bearing = std::atan2(at.y(), at.x());
+    point.range_bearing_covariance << 1e-4, 0.0, 0.0, 1e-5;
+    point.line = 0;
+    return point;
+  };
+  int first_corner = -1, second_corner = -1;
+  for (int k = 0; k <= options.filter.tentative_max_age; ++k) {
+    const double x = 0.05 * k;
+    FeatureSet features;
+    features.lines.push_back(segment({0.5 - x, 2.0}, {4.5 - x, 2.0}));
+    if (k == 0) features.points_of_interest.push_back(corner({0.5 - x, 2.0}));
+    if (k == options.filter.tentative_max_age) {
+      features.points_of_interest.push_back(corner({4.5 - x, 2.0}));
+    }
+    const ScanResult r = pipeline.processFeatures(0.1 * (k + 1), features, Pose2(x, 0.0, 0.0));
+    ASSERT_EQ(r.outcome, ScanOutcome::kIterated);
+    if (k == 0) {
+      ASSERT_EQ(r.iteration.new_landmark_ids.size(), 1u);
+      first_corner = r.iteration.new_landmark_ids[0];
+      ASSERT_EQ(pipeline.lineSupport().size(), 1u);
+      EXPECT_EQ(pipeline.lineSupport().begin()->second.endpoint_ids[0], first_corner);
+    }
+    if (k == options.filter.tentative_max_age) {
+      ASSERT_EQ(r.iteration.new_landmark_ids.size(), 1u);
+      second_corner = r.iteration.new_landmark_ids[0];
+      EXPECT_EQ(r.iteration.pruned, 1);
+      EXPECT_EQ(r.lines.matches.size(), 1u);
+    }
+  }
+  const EkfSlam& filter = pipeline.filter();
+  EXPECT_LT(filter.slotOf(first_corner), 0);
+  ASSERT_EQ(pipeline.lineSupport().size(), 1u);
+  const LineSupport& wall = pipeline.lineSupport().begin()->second;
+  for (int e : wall.endpoint_ids) EXPECT_TRUE(e == -1 || e == second_corner) << e;
+  EXPECT_TRUE(wall.endpoint_ids[0] == second_corner || wall.endpoint_ids[1] == second_corner);
+  EXPECT_TRUE(filter.state().allFinite());
+}
+
 // A segment whose value or covariance is not finite is refused and
 // counted; the filter ends exactly where it ends without that segment.
 TEST(LineLandmarks, NonFiniteLinesAreRefusedCountedAndLeaveTheMapUnchanged) {
