@@ -26,7 +26,7 @@ RVIZ  ?= 0
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench benchmark line-experiment fuzz sanitize sanitize-thread format check clean
+.PHONY: all deps workspace build test demo bench bench-workspace benchmark landmark-comparison line-experiment fuzz sanitize sanitize-thread format check clean
 
 all: build
 
@@ -62,24 +62,29 @@ test: build check
 demo: build
 	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/ci/run_demo.sh $(OUT)
 
-bench:
-	@tools/ci/install_deps.sh
-	@mkdir -p $(BENCH_WS)/src $(OUT)/bench
-	@if [ ! -e $(BENCH_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(BENCH_WS)/src/ekf_slam; fi
-	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
-	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
-	@tools/ci/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
-
-# Offline SLAM on the real datasets in ../shared/datasets, scored with the
-# relation metric; results in output/benchmark/ (summary.md).
-benchmark: deps
+# The Release workspace (native code, benchmark tools) for the measurements
+# on the real logs.
+bench-workspace: deps
 	@mkdir -p $(BENCH_WS)/src
 	@if [ ! -e $(BENCH_WS)/src/ekf_slam ]; then ln -s $(ROOT) $(BENCH_WS)/src/ekf_slam; fi
 	@cd $(BENCH_WS) && catkin_make -j$(JOBS) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
 	  -DCMAKE_BUILD_TYPE=Release -DEKF_SLAM_NATIVE=ON -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > $(BENCH_WS)/build.log 2>&1 \
 	  || { tail -n 60 $(BENCH_WS)/build.log; exit 1; }
+
+bench: bench-workspace
+	@mkdir -p $(OUT)/bench
+	@tools/ci/run_benchmarks.sh $(BENCH_WS)/devel/lib/ekf_slam/bench $(OUT)/bench
+
+# Offline SLAM on the real datasets in ../shared/datasets, scored with the
+# relation metric; results in output/benchmark/ (summary.md).
+benchmark: bench-workspace
 	@tools/ci/run_dataset_benchmark.sh $(BENCH_WS)/devel $(OUT)/benchmark
+
+# The landmark kinds (points, (p, θ) lines, θ-only lines) and the two
+# association methods on every real log, with and without loop closure;
+# tables in output/landmark_comparison/table.md (docs/results.md).
+landmark-comparison: bench-workspace
+	@tools/dev/landmark_comparison.sh $(BENCH_WS)/devel $(OUT)/landmark_comparison
 
 # The thesis's line-feature simulation (§4.3.5): Monte Carlo runs of points
 # only, points + (p, θ) lines and points + θ-only lines; text files and
