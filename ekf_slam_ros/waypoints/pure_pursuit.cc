@@ -131,5 +131,52 @@ VelocityCommand PurePursuit::update(const Pose2& pose, double dt) {
   return last_;
 }
 
+VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
+                                         const VelocityCommand& pursuit, double remaining) {
+  const VelocityCommand rest;
+  if (state_ == RecoveryState::kGaveUp) return rest;
+  if (state_ == RecoveryState::kBackingOff) {
+    // Back far enough, or as far as it goes in three times the time it
+    // should take (something behind it as well).
+    const double backed = (pose.translation() - backoff_start_.translation()).norm();
+    const double allowed = 3.0 * options_.backoff_distance / options_.backoff_speed;
+    if (backed < options_.backoff_distance && now - backoff_time_ < allowed) {
+      VelocityCommand reverse;
+      reverse.linear = -options_.backoff_speed;
+      return reverse;
+    }
+    state_ = RecoveryState::kDriving;
+    watching_ = false;
+    return rest;  // the pursuit starts again from rest
+  }
+  if (backoffs_ > 0 && remaining < remaining_at_backoff_ - options_.progress_distance) {
+    backoffs_ = 0;
+  }
+  const bool commanded = pursuit.linear != 0.0 || pursuit.angular != 0.0;
+  const bool moved =
+      watching_ && ((pose.translation() - anchor_.translation()).norm() > options_.stuck_distance ||
+                    std::abs(wrapAngle(pose.theta - anchor_.theta)) > options_.stuck_angle);
+  if (options_.stuck_time <= 0.0 || !commanded || !watching_ || moved) {
+    watching_ = commanded;
+    anchor_ = pose;
+    anchor_time_ = now;
+    return pursuit;
+  }
+  if (now - anchor_time_ < options_.stuck_time) return pursuit;
+  watching_ = false;
+  if (backoffs_ >= options_.max_backoffs) {
+    state_ = RecoveryState::kGaveUp;
+    return rest;
+  }
+  ++backoffs_;
+  remaining_at_backoff_ = remaining;
+  state_ = RecoveryState::kBackingOff;
+  backoff_start_ = pose;
+  backoff_time_ = now;
+  VelocityCommand reverse;
+  reverse.linear = -options_.backoff_speed;
+  return reverse;
+}
+
 }  // namespace waypoints
 }  // namespace ekf_slam

@@ -83,5 +83,55 @@ class PurePursuit {
   VelocityCommand last_;
 };
 
+// A robot that does not move while it is told to: the safety gate holding
+// back every forward command at an obstacle the path passes too near (the
+// map a little off, or the robot off its line), or wheels that stall. The
+// pursuit alone would keep asking for the same blocked motion for ever.
+// Blocked means: every command over the last stuck_time seconds asked for
+// motion, and the robot moved less than stuck_distance and turned less than
+// stuck_angle in that time. The robot then backs off backoff_distance
+// slowly (the P3-DX's rear bumpers, not the laser, watch behind it) and
+// the pursuit starts again from rest, meeting the path at another angle.
+// After max_backoffs back-offs with less than progress_distance of path
+// covered in between, it gives up: the robot stays at rest.
+struct RecoveryOptions {
+  double stuck_time = 8.0;         // s; 0: never judged blocked
+  double stuck_distance = 0.05;    // m
+  double stuck_angle = 0.1;        // rad
+  double backoff_distance = 0.3;   // m
+  double backoff_speed = 0.1;      // m/s
+  int max_backoffs = 3;            // in a row, without progress in between
+  double progress_distance = 1.0;  // m of path that count as progress
+};
+
+enum class RecoveryState { kDriving, kBackingOff, kGaveUp };
+
+class BlockageRecovery {
+ public:
+  explicit BlockageRecovery(RecoveryOptions options) : options_(options) {}
+  // One control step at time `now` (s): the robot's pose, the pursuit's
+  // command for it and the path it has left (PurePursuit::remaining).
+  // Returns the command to send: the pursuit's while driving, a slow
+  // reverse while backing off, zero once it gave up.
+  VelocityCommand update(const Pose2& pose, double now, const VelocityCommand& pursuit,
+                         double remaining);
+  // The pose was lost or the robot stopped from outside: judge afresh.
+  void restartWatch() { watching_ = false; }
+  RecoveryState state() const { return state_; }
+  // Back-offs since the path last made progress_distance of progress.
+  int backoffs() const { return backoffs_; }
+
+ private:
+  RecoveryOptions options_;
+  RecoveryState state_ = RecoveryState::kDriving;
+  bool watching_ = false;
+  Pose2 anchor_;              // where the robot was when the watch (re)started …
+  double anchor_time_ = 0.0;  // … and when
+  Pose2 backoff_start_;
+  double backoff_time_ = 0.0;
+  int backoffs_ = 0;
+  double remaining_at_backoff_ = 0.0;
+};
+
 }  // namespace waypoints
 }  // namespace ekf_slam

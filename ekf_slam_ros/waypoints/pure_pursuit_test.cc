@@ -177,6 +177,116 @@ TEST(PurePursuitTest, AngularLimitSetsTheSpeedOnTightArcs) {
   EXPECT_NEAR(command.linear, 0.3 / kappa, 1e-9);
 }
 
+// A wall 2 m ahead across the path that stops the robot 0.3 m before it
+// (as the safety gate would): the pursuit keeps asking for forward motion.
+// The recovery backs off 0.3 m after stuck_time, tries again, and after
+// max_backoffs fruitless back-offs gives up with the robot at rest.
+TEST(BlockageRecoveryTest, BacksOffFromABlockedPathAndGivesUpAfterTheLastTry) {
+  RecoveryOptions options;
+  PurePursuit pursuit({{0, 0}, {5, 0}}, PursuitOptions());
+  BlockageRecovery recovery(options);
+  const double dt = 0.05, stop_x = 1.7;
+  Pose2 pose;
+  int backoffs_started = 0;
+  double gave_up_at = -1.0;
+  RecoveryState previous = RecoveryState::kDriving;
+  for (int i = 0; i < 4000; ++i) {
+    const double now = i * dt;
+    const VelocityCommand wanted = pursuit.update(pose, dt);
+    const VelocityCommand command = recovery.update(pose, now, wanted, pursuit.remaining());
+    if (recovery.state() == RecoveryState::kBackingOff && previous != RecoveryState::kBackingOff) {
+      ++backoffs_started;
+      EXPECT_NEAR(pose.x, stop_x, 1e-9) << "backs off only where it is blocked";
+    }
+    if (previous == RecoveryState::kBackingOff && recovery.state() == RecoveryState::kDriving) {
+      EXPECT_NEAR(pose.x, stop_x - options.backoff_distance, 0.01);
+      pursuit.resetCommand();
+    }
+    if (recovery.state() == RecoveryState::kBackingOff) {
+      EXPECT_EQ(command.linear, -options.backoff_speed);
+      EXPECT_EQ(command.angular, 0.0);
+    }
+    if (recovery.state() == RecoveryState::kGaveUp) {
+      if (gave_up_at < 0.0) gave_up_at = now;
+      EXPECT_EQ(command.linear, 0.0);
+      EXPECT_EQ(command.angular, 0.0);
+    }
+    previous = recovery.state();
+    pose = drive(pose, command, dt);
+    pose.x = std::min(pose.x, stop_x);  // the wall
+  }
+  EXPECT_EQ(backoffs_started, options.max_backoffs);
+  EXPECT_EQ(recovery.state(), RecoveryState::kGaveUp);
+  // Each try: blocked for stuck_time, 3 s backing off, and the drive back.
+  EXPECT_GT(gave_up_at, (options.max_backoffs + 1) * options.stuck_time);
+  EXPECT_LT(gave_up_at, 80.0);
+}
+
+// A robot that drives, or turns on the spot, or waits at rest is never
+// judged blocked, and gets the pursuit's command unchanged.
+TEST(BlockageRecoveryTest, ARobotThatMovesOrIsToldToWaitIsNotBlocked) {
+  PursuitOptions pursuit_options;
+  // A loop with a point behind the start: it turns on the spot first.
+  PurePursuit pursuit({{0, 0}, {-1, 0}, {-1, 3}, {2, 3}, {2, 0}, {0, 0}}, pursuit_options);
+  BlockageRecovery recovery{RecoveryOptions()};
+  const double dt = 0.05;
+  Pose2 pose(0.0, 0.0, 0.0);
+  for (int i = 0; i < 4000 && !pursuit.done(); ++i) {
+    const VelocityCommand wanted = pursuit.update(pose, dt);
+    const VelocityCommand command = recovery.update(pose, i * dt, wanted, pursuit.remaining());
+    ASSERT_EQ(recovery.state(), RecoveryState::kDriving) << "at step " << i;
+    EXPECT_EQ(command.linear, wanted.linear);
+    EXPECT_EQ(command.angular, wanted.angular);
+    pose = drive(pose, command, dt);
+  }
+  EXPECT_TRUE(pursuit.done());
+  // Standing still for a minute with nothing asked of it.
+  for (int i = 0; i < 1200; ++i) {
+    recovery.update(pose, 1000.0 + i * dt, VelocityCommand(), pursuit.remaining());
+  }
+  EXPECT_EQ(recovery.state(), RecoveryState::kDriving);
+  EXPECT_EQ(recovery.backoffs(), 0);
+}
+
+// Progress along the path between two blockages starts the count afresh,
+// so a long run with a few tight spots never gives up.
+TEST(BlockageRecoveryTest, ProgressBetweenBlockagesResetsTheCount) {
+  RecoveryOptions options;
+  options.max_backoffs = 1;
+  BlockageRecovery recovery(options);
+  VelocityCommand forward;
+  forward.linear = 0.3;
+  const double dt = 0.05;
+  double now = 0.0;
+  Pose2 pose;
+  double remaining = 20.0;
+  // Blocked at x = 0 until the back-off starts.
+  while (recovery.state() == RecoveryState::kDriving && now < 60.0) {
+    recovery.update(pose, now, forward, remaining);
+    now += dt;
+  }
+  ASSERT_EQ(recovery.state(), RecoveryState::kBackingOff);
+  EXPECT_EQ(recovery.backoffs(), 1);
+  pose.x = -options.backoff_distance;
+  remaining += options.backoff_distance;
+  recovery.update(pose, now, forward, remaining);
+  ASSERT_EQ(recovery.state(), RecoveryState::kDriving);
+  // It then drives 2 m along the path and is blocked again: a first
+  // back-off again, not the end.
+  for (int i = 0; i < 100; ++i) {
+    now += dt;
+    pose.x += 0.02;
+    remaining -= 0.02;
+    recovery.update(pose, now, forward, remaining);
+  }
+  while (recovery.state() == RecoveryState::kDriving && now < 200.0) {
+    now += dt;
+    recovery.update(pose, now, forward, remaining);
+  }
+  EXPECT_EQ(recovery.state(), RecoveryState::kBackingOff);
+  EXPECT_EQ(recovery.backoffs(), 1);
+}
+
 }  // namespace
 }  // namespace waypoints
 }  // namespace ekf_slam

@@ -6,7 +6,10 @@
 //
 // It stops the robot (a zero cmd_vel, logged with the reason) when it is
 // done, when it shuts down, and whenever the pose is lost (no transform, or
-// one older than tf_timeout); it resumes when the pose returns.
+// one older than tf_timeout); it resumes when the pose returns. A robot that
+// does not move while it is told to (the safety gate holding it at an
+// obstacle) backs off and tries again, and gives up after max_backoffs
+// tries (BlockageRecovery in pure_pursuit.h); ~done then stays false.
 // Parameters: config/waypoints/README in docs/simulation.md.
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
@@ -44,6 +47,7 @@ struct DriverParams {
   double rate = 20.0;       // Hz, control loop
   double tf_timeout = 0.5;  // s, an older pose counts as lost
   waypoints::PursuitOptions pursuit;
+  waypoints::RecoveryOptions recovery;
 };
 
 bool loadParams(const ros::NodeHandle& private_node, DriverParams* params, std::string* error) {
@@ -62,6 +66,14 @@ bool loadParams(const ros::NodeHandle& private_node, DriverParams* params, std::
   load.number("max_angular_acceleration", &p.max_angular_acceleration, 0.01, 20.0);
   load.number("goal_tolerance", &p.goal_tolerance, 0.01, 5.0);
   load.number("rotate_in_place_angle", &p.rotate_in_place_angle, 0.1, 3.1416);
+  waypoints::RecoveryOptions& r = params->recovery;
+  load.number("stuck_time", &r.stuck_time, 0.0, 600.0);
+  load.number("stuck_distance", &r.stuck_distance, 0.001, 1.0);
+  load.number("stuck_angle", &r.stuck_angle, 0.001, 1.0);
+  load.number("backoff_distance", &r.backoff_distance, 0.0, 2.0);
+  load.number("backoff_speed", &r.backoff_speed, 0.01, 0.5);
+  load.integer("max_backoffs", &r.max_backoffs, 0, 100);
+  load.number("progress_distance", &r.progress_distance, 0.0, 100.0);
   if (params->global_frame == params->base_frame) {
     load.fail("base_frame", "must differ from global_frame (" + params->global_frame + ")");
   }
@@ -112,6 +124,7 @@ int main(int argc, char** argv) {
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
   std::unique_ptr<waypoints::PurePursuit> pursuit;
+  waypoints::BlockageRecovery recovery(params.recovery);
   const std::vector<Vector2> laps = waypoints::expandLaps(file.waypoints, params.laps, file.closed);
   ROS_INFO("waypoint_driver: %zu waypoints from %s, %d lap(s), following %s -> %s",
            file.waypoints.size(), params.waypoints_file.c_str(), file.closed ? params.laps : 1,
@@ -150,6 +163,7 @@ int main(int argc, char** argv) {
         ROS_WARN("waypoint_driver: robot stopped, pose lost: %s", why_lost.c_str());
         cmd_publisher.publish(geometry_msgs::Twist());
         pursuit->resetCommand();
+        recovery.restartWatch();
       } else if (!pursuit && (now - started).toSec() > 5.0) {
         ROS_WARN_THROTTLE(10.0, "waypoint_driver: waiting for the robot pose: %s",
                           why_lost.c_str());
@@ -184,9 +198,36 @@ int main(int argc, char** argv) {
     }
     const double dt = std::max(0.0, (now - last_update).toSec());
     last_update = now;
-    const waypoints::VelocityCommand command = pursuit->update(pose, dt);
+    const waypoints::VelocityCommand wanted = pursuit->update(pose, dt);
+    const waypoints::RecoveryState before = recovery.state();
+    const waypoints::VelocityCommand command =
+        recovery.update(pose, now.toSec(), wanted, pursuit->remaining());
+    if (recovery.state() != before) {
+      switch (recovery.state()) {
+        case waypoints::RecoveryState::kBackingOff:
+          ROS_WARN(
+              "waypoint_driver: blocked at (%.2f, %.2f) in %s: no progress for %.1f s although "
+              "motion was commanded (the safety gate holding the robot at an obstacle, or a "
+              "stall); backing off %.2f m and trying again (%d of %d)",
+              pose.x, pose.y, params.global_frame.c_str(), params.recovery.stuck_time,
+              params.recovery.backoff_distance, recovery.backoffs(), params.recovery.max_backoffs);
+          break;
+        case waypoints::RecoveryState::kDriving:
+          ROS_INFO("waypoint_driver: backed off to (%.2f, %.2f), driving on", pose.x, pose.y);
+          pursuit->resetCommand();
+          break;
+        case waypoints::RecoveryState::kGaveUp:
+          ROS_ERROR(
+              "waypoint_driver: blocked at (%.2f, %.2f) in %s after %d back-offs; giving up with "
+              "%.1f m of the path left. The robot stays at rest and ~done stays false; check "
+              "the path's clearance from obstacles (safety gate log) and the pose",
+              pose.x, pose.y, params.global_frame.c_str(), recovery.backoffs(),
+              pursuit->remaining());
+          break;
+      }
+    }
     if (!finished) cmd_publisher.publish(toTwist(command));
-    if (pursuit->done() && !finished && command.linear == 0.0 && command.angular == 0.0) {
+    if (pursuit->done() && !finished && wanted.linear == 0.0 && wanted.angular == 0.0) {
       finished = true;
       done.data = true;
       done_publisher.publish(done);
