@@ -123,16 +123,8 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
                             const std::vector<int>& observation_feature,
                             const IterationReport& points, LineIterationReport* out) {
   LineIterationReport& report = *out;
-  // The point step of this scan merged and pruned point landmarks: endpoint
-  // ids follow their survivors, and those of pruned landmarks are cleared.
-  for (auto& entry : tracks_) {
-    for (int& e : entry.second.endpoint_ids) {
-      for (const auto& [kept, dropped] : points.merged) {
-        if (e == dropped) e = kept;
-      }
-      if (e >= 0 && filter.slotOf(e) < 0) e = -1;
-    }
-  }
+  // The point step of this scan merged and pruned point landmarks.
+  followEndpoints(filter, points.merged);
 
   // The scan's point landmarks by feature index, for the segments' ends.
   std::unordered_map<int, int> landmark_of_feature;
@@ -317,17 +309,27 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
   }
 }
 
+void LineLandmarks::followEndpoints(const EkfSlam& filter,
+                                    const std::vector<std::pair<int, int>>& merged) {
+  for (auto& entry : tracks_) {
+    for (int& e : entry.second.endpoint_ids) {
+      for (const auto& [kept, dropped] : merged) {
+        if (e == dropped) e = kept;
+      }
+      if (e >= 0 && filter.slotOf(e) < 0) e = -1;
+    }
+  }
+}
+
 void LineLandmarks::synchronise(const EkfSlam& filter) {
   for (auto it = tracks_.begin(); it != tracks_.end();) {
     if (filter.slotOf(it->first) < 0) {
       it = tracks_.erase(it);
-      continue;
+    } else {
+      ++it;
     }
-    for (int& e : it->second.endpoint_ids) {
-      if (e >= 0 && filter.slotOf(e) < 0) e = -1;
-    }
-    ++it;
   }
+  followEndpoints(filter, {});
   refreshSupport(filter);
 }
 

@@ -143,6 +143,9 @@ class LineLandmarks {
   void remember(const EkfSlam& filter, int id, const LineObservation& observation,
                 const Segment& segment, bool extend);
   void refreshSupport(const EkfSlam& filter);
+  // Endpoint ids follow the point merges `merged` ((kept, dropped) pairs,
+  // in order); those of landmarks no longer in the filter are cleared.
+  void followEndpoints(const EkfSlam& filter, const std::vector<std::pair<int, int>>& merged);
 
   LandmarkKind kind_;
   LineLandmarkOptions options_;

@@ -140,11 +140,7 @@ VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
     // should take (something behind it as well).
     const double backed = (pose.translation() - backoff_start_.translation()).norm();
     const double allowed = 3.0 * options_.backoff_distance / options_.backoff_speed;
-    if (backed < options_.backoff_distance && now - backoff_time_ < allowed) {
-      VelocityCommand reverse;
-      reverse.linear = -options_.backoff_speed;
-      return reverse;
-    }
+    if (backed < options_.backoff_distance && now - backoff_time_ < allowed) return reverse();
     state_ = RecoveryState::kDriving;
     watching_ = false;
     return rest;  // the pursuit starts again from rest
@@ -173,9 +169,7 @@ VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
   state_ = RecoveryState::kBackingOff;
   backoff_start_ = pose;
   backoff_time_ = now;
-  VelocityCommand reverse;
-  reverse.linear = -options_.backoff_speed;
-  return reverse;
+  return reverse();
 }
 
 }  // namespace waypoints

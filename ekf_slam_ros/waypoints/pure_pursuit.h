@@ -122,6 +122,13 @@ class BlockageRecovery {
   int backoffs() const { return backoffs_; }
 
  private:
+  // The slow straight reverse of a back-off.
+  VelocityCommand reverse() const {
+    VelocityCommand command;
+    command.linear = -options_.backoff_speed;
+    return command;
+  }
+
   RecoveryOptions options_;
   RecoveryState state_ = RecoveryState::kDriving;
   bool watching_ = false;
