@@ -212,6 +212,14 @@ class Observer {
     subscribers_.push_back(node_.subscribe("association", 10, &Observer::onAssociation, this));
     subscribers_.push_back(node_.subscribe("smoothed_path", 1, &Observer::onSmoothedPath, this));
   }
+  // The test's spinner threads may be inside a callback right now: shutting
+  // a subscription down waits for its running callback and stops new ones,
+  // so the members below outlive every callback that touches them.
+  ~Observer() {
+    for (ros::Subscriber& subscriber : subscribers_) subscriber.shutdown();
+  }
+  Observer(const Observer&) = delete;
+  Observer& operator=(const Observer&) = delete;
 
   // The node's diagnostic value `key` as a number (NaN when not reported yet).
   double diagnostic(const std::string& key) {

@@ -9,6 +9,7 @@ rm -rf "$results"
 # shellcheck disable=SC1091
 source "$ws/devel/setup.bash"
 export ROS_HOME="$ws/ros_home"
+rm -rf "$ROS_HOME/log"
 mkdir -p "$ROS_HOME"
 ( cd "$ws" && catkin_make run_tests -j1 ${CATKIN_TEST_ARGS:-} ) > "$ws/run_tests.log" 2>&1
 status=$?
@@ -17,6 +18,9 @@ if [ $status -ne 0 ]; then
   echo "run_tests: 'catkin_make run_tests' exited with $status; log: $ws/run_tests.log" >&2
   tail -n 30 "$ws/run_tests.log" >&2
 fi
+# A test program that crashed writes no results ("did not generate test
+# results"); rostest's own log names the process and the signal it died of.
+grep -h 'process has died.*exit code -' "$ROS_HOME"/log/rostest-*.log 2>/dev/null | cut -c1-240 | tail -n 20 || true
 /usr/bin/python3 "$root/tools/ci/test_summary.py" "$results"
 summary=$?
 [ $status -ne 0 ] && exit $status
