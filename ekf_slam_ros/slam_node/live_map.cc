@@ -1,5 +1,7 @@
 #include "ekf_slam_ros/slam_node/live_map.h"
 
+#include <malloc.h>
+
 #include <chrono>
 #include <limits>
 #include <utility>
@@ -111,19 +113,32 @@ void LiveMapPublisher::run() {
       laser = laser_;
       header = header_;
     }
-    const auto start = std::chrono::steady_clock::now();
-    const nav_msgs::OccupancyGrid map =
-        toOccupancyGridMessage(gridFromKeyScans(keys, laser, options_), header);
-    map_publisher_.publish(map);
-    metadata_publisher_.publish(map.info);
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++published_;
-    latest_ = map;
-    latest_time_ = std::chrono::steady_clock::now();
-    have_latest_ = true;
-    last_build_seconds_ =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    pending_ = false;
+    {
+      const auto start = std::chrono::steady_clock::now();
+      const nav_msgs::OccupancyGrid map =
+          toOccupancyGridMessage(gridFromKeyScans(keys, laser, options_), header);
+      map_publisher_.publish(map);
+      metadata_publisher_.publish(map.info);
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++published_;
+      latest_ = map;
+      latest_time_ = std::chrono::steady_clock::now();
+      have_latest_ = true;
+      last_build_seconds_ =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      pending_ = false;
+    }
+    // The grid just built and the key scans' copy are freed now, and so is
+    // what the back end's optimisations left behind since the last map
+    // (their linear systems, earlier views of the graph). The allocator
+    // keeps such pages unless told; handing them back here, on this
+    // thread, lets the resident set show what the node really holds
+    // (docs/robustness.md, Soak) without the scan thread ever waiting for it.
+    keys.clear();
+    keys.shrink_to_fit();
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
   }
 }
 

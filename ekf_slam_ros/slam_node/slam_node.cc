@@ -4,8 +4,6 @@
 // slam_node_services.cc, slam_node_diagnostics.cc.
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
-#include <malloc.h>
-
 #include <chrono>
 #include <cmath>
 
@@ -18,16 +16,6 @@ namespace ekf_slam {
 namespace {
 
 using ros_conversions::toPoseMessage;
-
-// Each optimisation leaves behind the back end's working memory (its linear
-// system and the earlier views of the graph), which grows with the graph;
-// the allocator keeps those pages unless told. Handing them back lets the
-// resident set show what the node really holds (docs/robustness.md, Soak).
-void releaseFreeMemory() {
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
-}
 
 }  // namespace
 
@@ -253,7 +241,6 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   if (pipeline_->backEndOptimisations() != optimisations_published_) {
     optimisations_published_ = pipeline_->backEndOptimisations();
     publishLoopClosedPath(stamp);
-    releaseFreeMemory();
   }
 
   std_msgs::Header map_header;
