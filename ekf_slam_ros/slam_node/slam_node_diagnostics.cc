@@ -3,6 +3,9 @@
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
 #include <sstream>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include "ekf_slam_core/filter/chi_square.h"
 
@@ -127,6 +130,13 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("rejected by filter: bad input", counters.bad_input);
   status.add("rejected by filter: update refused", counters.update_failures);
   status.add("laser pose changes", laser_pose_changes_);
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  // What the node's heap holds (allocated chunks, mmapped ones included),
+  // as against the resident set, which also counts the pages the allocator
+  // keeps free: a soak tells a growing heap from a fragmented one by it.
+  const struct mallinfo2 heap = mallinfo2();
+  status.add("heap in use [KiB]", static_cast<long>((heap.uordblks + heap.hblkhd) / 1024));
+#endif
 }
 
 }  // namespace ekf_slam

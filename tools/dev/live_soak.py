@@ -17,7 +17,8 @@ processed and key scans from /diagnostics, so that memory can be set
 against what the map explains.
 
 Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed key_scans
-key_scans_without_readings; the last two 0 with loop closure off)
+key_scans_without_readings heap_in_use_kib; the key scans 0 with loop closure off;
+heap_in_use_kib is the node's own count of its allocated heap, /diagnostics)
 and prints a summary: RSS after the warm-up and at the end.
 
 usage (after make build, with the workspace sourced):
@@ -153,7 +154,7 @@ def main():
         rows = []
         with open(path, "w") as out:
             out.write("# t_s rss_kib cpu_percent landmarks scans_processed key_scans "
-                      "key_scans_without_readings\n")
+                      "key_scans_without_readings heap_in_use_kib\n")
             start = time.monotonic()
             last = sample(pid)
             last_t = start
@@ -171,9 +172,10 @@ def main():
                 row = (now - start, current[0], cpu, int(values.get("landmarks", "0") or 0),
                        int(values.get("scans processed", "0") or 0),
                        int(values.get("key scans", "0") or 0),
-                       int(values.get("key scans without readings (place full)", "0") or 0))
+                       int(values.get("key scans without readings (place full)", "0") or 0),
+                       int(values.get("heap in use [KiB]", "0") or 0))
                 rows.append(row)
-                out.write("%.1f %d %.1f %d %d %d %d\n" % row)
+                out.write("%.1f %d %.1f %d %d %d %d %d\n" % row)
                 out.flush()
         warm = [r for r in rows if r[0] >= args.warmup_minutes * 60.0]
         if not warm:
