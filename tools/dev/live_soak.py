@@ -19,7 +19,14 @@ against what the map explains.
 Writes OUT/live_soak.txt (t_s rss_kib cpu_percent landmarks scans_processed key_scans
 key_scans_without_readings heap_in_use_kib; the key scans 0 with loop closure off;
 heap_in_use_kib is the node's own count of its allocated heap, /diagnostics)
-and prints a summary: RSS after the warm-up and at the end.
+and OUT/live_soak_maps.txt, once a minute, where the resident set lies
+(/proc/<pid>/smaps: t_s heap_kib thread_arenas_kib other_anonymous_kib
+stacks_kib files_kib anonymous_mappings): the main arena's [heap], the
+64 MiB-aligned mappings glibc gives each further arena, the rest of the
+anonymous memory (large mmapped chunks, thread stacks without a name),
+[stack], and what is mapped from files (code, libraries). It tells pages
+the allocator keeps from memory mapped outside it.
+Prints a summary: RSS after the warm-up and at the end.
 
 usage (after make build, with the workspace sourced):
   source .build/setup.bash
@@ -66,6 +73,45 @@ def sample(pid):
         return rss, (int(fields[11]) + int(fields[12])) / ticks
     except (OSError, StopIteration, ValueError):
         return None
+
+
+ARENA_BYTES = 64 << 20  # glibc's HEAP_MAX_SIZE on 64-bit: one further arena's mapping
+
+
+def resident_by_kind(pid):
+    """(heap, thread arenas, other anonymous, stacks, files, anonymous mappings)
+    of process pid in KiB (the last a count), from /proc/<pid>/smaps; None
+    when it is gone. A further arena is an anonymous mapping whose start is
+    64 MiB-aligned and whose reservation (with the unreadable rest glibc
+    keeps next to it) is at most 64 MiB."""
+    totals = {"heap": 0, "arena": 0, "anon": 0, "stack": 0, "file": 0}
+    mappings = 0
+    try:
+        with open("/proc/%d/smaps" % pid) as f:
+            kind = None
+            for line in f:
+                fields = line.split()
+                if "-" in fields[0] and len(fields) >= 5 and ":" in fields[3]:
+                    start, end = (int(v, 16) for v in fields[0].split("-"))
+                    name = fields[5] if len(fields) > 5 else ""
+                    if name == "[heap]":
+                        kind = "heap"
+                    elif name.startswith("[stack"):
+                        kind = "stack"
+                    elif name.startswith("/"):
+                        kind = "file"
+                    elif name == "":
+                        mappings += 1
+                        aligned = start % ARENA_BYTES == 0 and end - start <= ARENA_BYTES
+                        kind = "arena" if aligned and "r" in fields[1] else "anon"
+                    else:
+                        kind = None  # [vdso], [vvar], ...
+                elif fields[0] == "Rss:" and kind is not None:
+                    totals[kind] += int(fields[1])
+    except (OSError, ValueError, IndexError):
+        return None
+    return (totals["heap"], totals["arena"], totals["anon"], totals["stack"], totals["file"],
+            mappings)
 
 
 class Diagnostics:
@@ -152,6 +198,10 @@ def main():
         diagnostics = Diagnostics()
         path = os.path.join(args.out, "live_soak.txt")
         rows = []
+        maps = open(os.path.join(args.out, "live_soak_maps.txt"), "w")
+        maps.write("# t_s heap_kib thread_arenas_kib other_anonymous_kib stacks_kib files_kib "
+                   "anonymous_mappings\n")
+        next_maps = 0.0
         with open(path, "w") as out:
             out.write("# t_s rss_kib cpu_percent landmarks scans_processed key_scans "
                       "key_scans_without_readings heap_in_use_kib\n")
@@ -177,6 +227,12 @@ def main():
                 rows.append(row)
                 out.write("%.1f %d %.1f %d %d %d %d %d\n" % row)
                 out.flush()
+                if now - start >= next_maps:
+                    kinds = resident_by_kind(pid)
+                    if kinds is not None:
+                        maps.write("%.1f %d %d %d %d %d %d\n" % ((now - start,) + kinds))
+                        maps.flush()
+                    next_maps += 60.0
         warm = [r for r in rows if r[0] >= args.warmup_minutes * 60.0]
         if not warm:
             print("live_soak: shorter than the warm-up; nothing to compare", file=sys.stderr)
