@@ -3,27 +3,11 @@
 // is invalid.
 #include <ros/ros.h>
 
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-
 #include <stdexcept>
 
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
 int main(int argc, char** argv) {
-#ifdef __GLIBC__
-  // Blocks of 4 MiB and more (the live map's grids, the largest of the back
-  // end's linear systems) get pages of their own, handed back when they are
-  // freed. glibc's default threshold rises to the largest block freed so
-  // far, after which such blocks are carved from the arena of the thread
-  // that builds them, which on a soak kept growing by 0.25 MiB a minute
-  // while the heap in use stayed flat (docs/robustness.md, Soak). A lower
-  // threshold (256 KiB) also held memory flat but doubled the node's CPU
-  // (a fresh mapping, zeroed by the kernel, for every mid-sized block).
-  // Set before any thread starts.
-  mallopt(M_MMAP_THRESHOLD, 4 * 1024 * 1024);
-#endif
   ros::init(argc, argv, "ekf_slam_node");
   ros::NodeHandle node, private_node("~");
   ekf_slam::SlamNodeParams params;
