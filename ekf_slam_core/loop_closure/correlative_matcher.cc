@@ -9,8 +9,16 @@ namespace ekf_slam {
 std::string CorrelativeMatcherOptions::validate() const { return checkFields(*this); }
 
 LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
-                               const CorrelativeMatcherOptions& options)
-    : resolution_(options.resolution), pad_(1, 0) {
+                               const CorrelativeMatcherOptions& options) {
+  build(points, options);
+}
+
+void LikelihoodGrid::build(const std::vector<Vector2>& points,
+                           const CorrelativeMatcherOptions& options) {
+  resolution_ = options.resolution;
+  origin_ = Vector2::Zero();
+  width_ = height_ = level_count_ = 0;
+  pad_.assign(1, 0);
   if (points.empty()) return;
   // The likelihood is cut at 3 sigma, beyond which it is below 1 %.
   const double reach = 3.0 * options.sigma;
@@ -28,8 +36,12 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
   width_ = static_cast<int>(cells_x);
   height_ = static_cast<int>(cells_y);
   const size_t cells_total = static_cast<size_t>(width_) * height_;
-  levels_.assign(1, std::vector<float>(cells_total, 0.0f));
+  // assign() keeps a buffer's capacity: a grid no larger than an earlier
+  // one allocates nothing.
+  if (levels_.size() < static_cast<size_t>(options.levels)) levels_.resize(options.levels);
+  level_count_ = 1;
   std::vector<float>& fine = levels_[0];
+  fine.assign(cells_total, 0.0f);
   const int cells = static_cast<int>(std::ceil(reach / resolution_));
   const double inv_two_sigma2 = 1.0 / (2.0 * options.sigma * options.sigma);
   for (const Vector2& p : points) {
@@ -55,24 +67,39 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<Vector2>& points,
     const int h = 1 << (k - 1);
     const int pad = pad_.back() + h;
     const int w = width_ + pad, ht = height_ + pad;
-    std::vector<float> along_x(static_cast<size_t>(w) * ht, 0.0f);
+    along_x_.assign(static_cast<size_t>(w) * ht, 0.0f);
     for (int y = 0; y < ht; ++y) {
       for (int x = 0; x < w; ++x) {
-        along_x[static_cast<size_t>(y) * w + x] =
+        along_x_[static_cast<size_t>(y) * w + x] =
             std::max(value(k - 1, x - pad, y - pad), value(k - 1, x - pad + h, y - pad));
       }
     }
-    std::vector<float> level(along_x.size(), 0.0f);
+    std::vector<float>& level = levels_[k];
+    level.assign(along_x_.size(), 0.0f);
     for (int y = 0; y < ht; ++y) {
       for (int x = 0; x < w; ++x) {
-        const float a = along_x[static_cast<size_t>(y) * w + x];
+        const float a = along_x_[static_cast<size_t>(y) * w + x];
         level[static_cast<size_t>(y) * w + x] =
-            y + h < ht ? std::max(a, along_x[static_cast<size_t>(y + h) * w + x]) : a;
+            y + h < ht ? std::max(a, along_x_[static_cast<size_t>(y + h) * w + x]) : a;
       }
     }
-    levels_.push_back(std::move(level));
     pad_.push_back(pad);
+    level_count_ = k + 1;
   }
+}
+
+size_t LikelihoodGrid::storageBytes() const {
+  size_t bytes = along_x_.capacity() * sizeof(float);
+  for (const std::vector<float>& level : levels_) bytes += level.capacity() * sizeof(float);
+  return bytes;
+}
+
+void LikelihoodGrid::release() {
+  width_ = height_ = level_count_ = 0;
+  origin_ = Vector2::Zero();
+  pad_.assign(1, 0);
+  std::vector<std::vector<float>>().swap(levels_);
+  std::vector<float>().swap(along_x_);
 }
 
 void LikelihoodGrid::cellOf(const Vector2& p, int* ix, int* iy) const {

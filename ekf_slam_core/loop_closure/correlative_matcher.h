@@ -51,7 +51,19 @@ class LikelihoodGrid {
   // Larger point sets (kilometres across: corrupt poses) give an empty grid.
   static constexpr double kMaxCells = 2.5e7;
 
+  LikelihoodGrid() = default;  // empty
   LikelihoodGrid(const std::vector<Vector2>& points, const CorrelativeMatcherOptions& options);
+
+  // Rebuilds the grid for `points` in the storage of the previous one: a
+  // caller that builds grid after grid (the loop closer, one per verified
+  // candidate) then reuses its buffers instead of allocating megabytes each
+  // time, which costs page faults and fragments the heap of a long-running
+  // thread. The result equals a grid constructed from the same arguments.
+  void build(const std::vector<Vector2>& points, const CorrelativeMatcherOptions& options);
+  // Bytes the grid's buffers hold (capacity, not size).
+  size_t storageBytes() const;
+  // Hands the buffers back (the grid is then empty).
+  void release();
 
   // Fine cell of a point (may lie outside the grid).
   void cellOf(const Vector2& p, int* ix, int* iy) const;
@@ -63,7 +75,7 @@ class LikelihoodGrid {
     return levels_[level][static_cast<size_t>(y) * w + x];
   }
   float fine(int ix, int iy) const { return value(0, ix, iy); }
-  int levels() const { return static_cast<int>(levels_.size()); }
+  int levels() const { return level_count_; }
   double resolution() const { return resolution_; }
   bool empty() const { return width_ == 0; }
   // Corners of the grid (m, in the points' frame).
@@ -74,12 +86,14 @@ class LikelihoodGrid {
   bool inside(int ix, int iy) const { return ix >= 0 && iy >= 0 && ix < width_ && iy < height_; }
   size_t index(int ix, int iy) const { return static_cast<size_t>(iy) * width_ + ix; }
 
-  double resolution_;
+  double resolution_ = 0.05;
   Vector2 origin_ = Vector2::Zero();  // corner of cell (0, 0)
   int width_ = 0;
   int height_ = 0;
+  int level_count_ = 0;                     // levels in use; levels_ may hold more buffers
   std::vector<std::vector<float>> levels_;  // level k: (width + pad_[k]) × (height + pad_[k])
   std::vector<int> pad_;                    // cells level k extends below the grid's lower edges
+  std::vector<float> along_x_;              // build's scratch: a level's maxima along x
 };
 
 struct CorrelativeResult {

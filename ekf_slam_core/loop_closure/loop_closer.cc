@@ -489,7 +489,16 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   if (static_cast<int>(query.size()) < icp_.min_correspondences) return false;
   const std::vector<Vector2> sparse_query = queryPoints(key, true);
 
-  const LikelihoodGrid grid(submap, options_.correlative);
+  // One grid's storage serves every verification; an outsized one (a
+  // submap stretched by a corrupt pose) is handed back when it is done.
+  LikelihoodGrid& grid = verify_grid_;
+  struct Bound {
+    LikelihoodGrid& grid;
+    ~Bound() {
+      if (grid.storageBytes() > kKeptGridBytes) grid.release();
+    }
+  } bound{grid};
+  grid.build(submap, options_.correlative);
   const CorrelativeResult coarse = correlativeSearch(sparse_query, grid, guess, radius, angle,
                                                      options_.correlative, options_.min_score);
   if (coarse.score < options_.min_score) return false;
@@ -540,6 +549,7 @@ PoseGraphSummary LoopCloser::optimise() {
 }
 
 void LoopCloser::finish() {
+  verify_grid_.release();  // no more searches
   if (hypothesis_) {
     hypothesis_.reset();
     ++counters_.unconfirmed;

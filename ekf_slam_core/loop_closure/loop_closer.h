@@ -391,6 +391,12 @@ class LoopCloser {
     Pose2 relative;
   };
   std::optional<Hypothesis> hypothesis_;  // a wide-window loop awaiting confirmation
+  // verify()'s likelihood grid, rebuilt in place for each candidate: a
+  // fresh grid of megabytes per candidate cost page faults and left the
+  // back end thread's heap fragmented. Storage above kKeptGridBytes is not
+  // kept between verifications.
+  static constexpr size_t kKeptGridBytes = size_t{32} << 20;
+  LikelihoodGrid verify_grid_;
 };
 
 }  // namespace ekf_slam

@@ -78,6 +78,59 @@ TEST(CorrelativeSearch, FindsAPoseMetresAndDegreesFromTheGuess) {
   EXPECT_LT(std::abs(wrapAngle(result.pose.theta - query_pose.theta)), degToRad(1.0));
 }
 
+// A grid rebuilt in the storage of earlier ones (larger, smaller, empty,
+// outsized) holds exactly what a grid built afresh from the same points
+// holds, at every level and cell, and reuses its buffers when it fits.
+TEST(LikelihoodGrid, RebuiltInPlaceEqualsAFreshGrid) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(11);
+  const std::vector<Vector2> room = placedSweep(world, Pose2(-2.0, 1.0, 0.4), &rng);
+  const std::vector<Vector2> corner(room.begin(), room.begin() + room.size() / 4);
+  const std::vector<Vector2> far = {Vector2(0.0, 0.0), Vector2(1e5, 1e5)};  // beyond kMaxCells
+  const CorrelativeMatcherOptions options;
+  LikelihoodGrid reused;
+  EXPECT_TRUE(reused.empty());
+  const auto expectSame = [&](const std::vector<Vector2>& points) {
+    reused.build(points, options);
+    const LikelihoodGrid fresh(points, options);
+    ASSERT_EQ(reused.empty(), fresh.empty());
+    ASSERT_EQ(reused.levels(), fresh.levels());
+    EXPECT_EQ(reused.lowerCorner(), fresh.lowerCorner());
+    EXPECT_EQ(reused.upperCorner(), fresh.upperCorner());
+    if (fresh.empty()) return;
+    int ix_end, iy_end;
+    fresh.cellOf(fresh.upperCorner(), &ix_end, &iy_end);
+    long differing = 0, positive = 0;
+    for (int level = 0; level < fresh.levels(); ++level) {
+      const int pad = 1 << level;  // one cell beyond the level's padding
+      for (int iy = -pad; iy <= iy_end + 1; ++iy) {
+        for (int ix = -pad; ix <= ix_end + 1; ++ix) {
+          differing += reused.value(level, ix, iy) != fresh.value(level, ix, iy);
+          positive += fresh.value(level, ix, iy) > 0.0f;
+        }
+      }
+    }
+    EXPECT_EQ(differing, 0);
+    EXPECT_GT(positive, 1000);
+  };
+  expectSame(room);
+  const size_t room_bytes = reused.storageBytes();
+  EXPECT_GT(room_bytes, 0u);
+  expectSame(corner);
+  EXPECT_EQ(reused.storageBytes(), room_bytes);  // a smaller grid allocates nothing
+  reused.build({}, options);
+  EXPECT_TRUE(reused.empty());
+  EXPECT_EQ(reused.levels(), 0);
+  reused.build(far, options);
+  EXPECT_TRUE(reused.empty());
+  expectSame(room);
+  EXPECT_EQ(reused.storageBytes(), room_bytes);
+  reused.release();
+  EXPECT_TRUE(reused.empty());
+  EXPECT_EQ(reused.storageBytes(), 0u);
+  expectSame(corner);
+}
+
 // A window of ±60 m and any heading around a guess 25 m and 150 deg off:
 // the multi-level bound prunes the empty space, and the pose is found.
 TEST(CorrelativeSearch, FindsThePoseAnywhereInAHugeWindowAtAnyHeading) {
