@@ -237,7 +237,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   // loop); otherwise the filter's.
   map_to_odom_ = compose(result.causal_pose, inverse(odometry));
   have_map_to_odom_ = true;
-  publishMapToOdom(stamp);
+  publishMapToOdom(stamp, /*new_estimate=*/true);
   if (pipeline_->backEndOptimisations() != optimisations_published_) {
     optimisations_published_ = pipeline_->backEndOptimisations();
     publishLoopClosedPath(stamp);

@@ -155,7 +155,9 @@ class SlamNode {
   void resetState();
 
   // --- outputs (slam_node_outputs.cc): map → odom, paths, maps.
-  void publishMapToOdom(const ros::Time& data_stamp);
+  // new_estimate: map_to_odom_ was just updated from a scan, and goes out
+  // even when the timer already used a newer stamp.
+  void publishMapToOdom(const ros::Time& data_stamp, bool new_estimate = false);
   void onTfTimer(const ros::TimerEvent&);
   void publishLoopClosedPath(const ros::Time& data_stamp);
   void onMapTimer(const ros::TimerEvent&);

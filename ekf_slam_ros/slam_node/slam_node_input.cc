@@ -92,6 +92,7 @@ bool SlamNode::acceptingInput() {
         (last_clock_ - now).toSec());
     tf_buffer_.clear();
     clearWaiting();
+    last_tf_stamp_ = ros::Time();  // map → odom goes out again with the new data's stamps
   }
   last_clock_ = now;
   if (paused_) {

@@ -33,14 +33,23 @@ void SlamNode::publishLandmarkMap(const std_msgs::Header& header) {
   landmark_map_publisher_.publish(toLandmarkMapMessage(map, header));
 }
 
-void SlamNode::publishMapToOdom(const ros::Time& data_stamp) {
+void SlamNode::publishMapToOdom(const ros::Time& data_stamp, bool new_estimate) {
   // Each stamp once (tf2 listeners warn about repeated data); stamped with
   // data time, future-dated by transform_tolerance so that consumers can
   // look up map → base_link until the next update (as amcl and gmapping do).
-  if (!have_map_to_odom_ || data_stamp <= last_tf_stamp_) return;
-  last_tf_stamp_ = data_stamp;
+  if (!have_map_to_odom_) return;
+  ros::Time stamp = data_stamp;
+  if (stamp <= last_tf_stamp_) {
+    // The timer has already re-sent the previous estimate stamped with
+    // newer odometry (the scan waited for it). A new estimate (a loop's
+    // correction among them) goes out now, just after that stamp, rather
+    // than at the timer's next tick.
+    if (!new_estimate) return;
+    stamp = last_tf_stamp_ + ros::Duration(0, 1000);
+  }
+  last_tf_stamp_ = stamp;
   geometry_msgs::TransformStamped t;
-  t.header.stamp = data_stamp + ros::Duration(params_.transform_tolerance);
+  t.header.stamp = stamp + ros::Duration(params_.transform_tolerance);
   t.header.frame_id = params_.map_frame;
   t.child_frame_id = params_.odom_frame;
   t.transform.translation.x = map_to_odom_.x;
