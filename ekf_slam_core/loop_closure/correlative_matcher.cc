@@ -94,13 +94,7 @@ size_t LikelihoodGrid::storageBytes() const {
   return bytes;
 }
 
-void LikelihoodGrid::release() {
-  width_ = height_ = level_count_ = 0;
-  origin_ = Vector2::Zero();
-  pad_.assign(1, 0);
-  std::vector<std::vector<float>>().swap(levels_);
-  std::vector<float>().swap(along_x_);
-}
+void LikelihoodGrid::release() { *this = LikelihoodGrid(); }
 
 void LikelihoodGrid::cellOf(const Vector2& p, int* ix, int* iy) const {
   *ix = static_cast<int>(std::floor((p.x() - origin_.x()) / resolution_));
