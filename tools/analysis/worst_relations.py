@@ -2,35 +2,24 @@
 """Where a trajectory's relation error comes from: the relations with the
 largest translational error, and how much of the mean they carry.
 
-  tools/analysis/worst_relations.py RELATIONS TRAJECTORY [--top N]
+  source .build/setup.bash
+  tools/analysis/worst_relations.py RELATIONS TRAJECTORY [--top N] [--tolerance S]
 
 RELATIONS: a relations file (timestamp1 timestamp2 x y z roll pitch yaw,
 the second pose seen from the first); TRAJECTORY: the offline runner's
-trajectory file (stamp x y theta ...). Each relation's poses are the
-trajectory's poses nearest in time (evaluate_relations gives the scores
-themselves). Prints the mean, the share of the error the worst 1 / 5 /
-10 / 20 / 50 relations carry with the mean without them, and the worst N
-with their times from the log's first relation.
+trajectory file (stamp x y theta ...). As in evaluate_relations (which
+gives the scores themselves), each relation takes the trajectory's poses
+nearest its two stamps, within --tolerance; a relation without them is
+left out and counted. Prints the mean, the share of the error the worst
+1 / 5 / 10 / 20 / 50 relations carry with the mean without them, and the
+worst N with their times from the log's first relation.
 """
 import argparse
 import bisect
 import math
 
-
-def read_trajectory(path):
-    rows = []
-    with open(path) as f:
-        for line in f:
-            if line.strip() and not line.startswith("#"):
-                rows.append([float(v) for v in line.split()[:4]])
-    rows.sort()
-    return rows
-
-
-def nearest(rows, stamps, t):
-    k = bisect.bisect_left(stamps, t)
-    candidates = [j for j in (k - 1, k) if 0 <= j < len(rows)]
-    return rows[min(candidates, key=lambda j: abs(stamps[j] - t))]
+from ekf_slam_tools import se2
+from ekf_slam_tools.trajectories import read_rows
 
 
 def main():
@@ -38,25 +27,37 @@ def main():
     parser.add_argument("relations")
     parser.add_argument("trajectory")
     parser.add_argument("--top", type=int, default=25)
+    parser.add_argument("--tolerance", type=float, default=1e-4,
+                        help="s, a pose farther from a relation's stamp is not its pose "
+                             "(evaluate_relations' default)")
     args = parser.parse_args()
-    rows = read_trajectory(args.trajectory)
+    rows = sorted(read_rows(args.trajectory))
     stamps = [r[0] for r in rows]
+
+    def pose_at(t):
+        k = bisect.bisect_left(stamps, t)
+        near = min((j for j in (k - 1, k) if 0 <= j < len(rows)),
+                   key=lambda j: abs(stamps[j] - t), default=None)
+        if near is None or abs(stamps[near] - t) > args.tolerance:
+            return None
+        return tuple(rows[near][1:4])
+
     errors = []
-    with open(args.relations) as f:
-        for line in f:
-            if not line.strip() or line.startswith("#"):
-                continue
-            t1, t2, x, y = (float(v) for v in line.split()[:4])
-            a, b = nearest(rows, stamps, t1), nearest(rows, stamps, t2)
-            c, s = math.cos(a[3]), math.sin(a[3])
-            dx, dy = b[1] - a[1], b[2] - a[2]
-            error = math.hypot(c * dx + s * dy - x, -s * dx + c * dy - y)
-            errors.append((error, t1, t2, math.hypot(x, y)))
+    missing = 0
+    for t1, t2, x, y, *_ in read_rows(args.relations):
+        a, b = pose_at(t1), pose_at(t2)
+        if a is None or b is None:
+            missing += 1
+            continue
+        d = se2.compose(se2.inverse(a), b)
+        errors.append((math.hypot(d[0] - x, d[1] - y), t1, t2, math.hypot(x, y)))
     if not errors:
-        raise SystemExit("worst_relations: no relation in %s" % args.relations)
+        raise SystemExit("worst_relations: no relation of %s finds its poses in %s"
+                         % (args.relations, args.trajectory))
     errors.sort(reverse=True)
     total = sum(e[0] for e in errors)
-    print("%d relations, mean %.4f m" % (len(errors), total / len(errors)))
+    print("%d relations, mean %.4f m" % (len(errors), total / len(errors))
+          + ("; %d left out (no pose within %g s)" % (missing, args.tolerance) if missing else ""))
     for k in (1, 5, 10, 20, 50):
         if k < len(errors):
             worst = sum(e[0] for e in errors[:k])
