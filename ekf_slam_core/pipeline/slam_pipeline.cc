@@ -98,6 +98,18 @@ std::unique_ptr<LineLandmarks> lineLandmarksFor(const PipelineOptions& options) 
   return nullptr;
 }
 
+// The full smoother's local matcher, when its motion edges need one.
+std::unique_ptr<ScanMatchingOdometry> localMatcherFor(const PipelineOptions& options) {
+  if (!options.scan_matching.enabled || options.scan_matching.map_mode != "global" ||
+      options.smoother.motion_edges != SmootherMotion::kLocalMatch) {
+    return nullptr;
+  }
+  ScanMatcherOptions local = options.scan_matching;
+  local.map_mode = "local";
+  local.local_map_scans = options.smoother.local_match_key_scans;
+  return std::make_unique<ScanMatchingOdometry>(local, options.filter.motion_noise);
+}
+
 FilterOptions filterOptionsFor(const PipelineOptions& options) {
   FilterOptions filter = options.filter;
   if (options.scan_matching.enabled) filter.motion_noise = options.scan_matched_motion_noise;
@@ -111,6 +123,7 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
                         ? std::make_unique<ScanMatchingOdometry>(options.scan_matching,
                                                                  options.filter.motion_noise)
                         : nullptr),
+      local_matcher_(localMatcherFor(options)),
       // The loop closer keeps its per-scan entries for at least the
       // pipeline's longest history (history_scans plus the trimming step).
       back_end_(options.loop_closure.enabled
@@ -222,7 +235,11 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
           scan_matcher_->isOdometryJump(raw_odometry, options_.filter.max_step_translation,
                                         options_.filter.max_step_rotation)) {
         scan_matcher_->reanchorRaw(raw_odometry);
+        if (local_matcher_) local_matcher_->reanchorRaw(raw_odometry);
         ++counters_.odometry_jumps;
+      }
+      if (local_matcher_) {
+        local_pose_ = local_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose);
       }
       MatchResult match;
       odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
@@ -235,6 +252,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       }
     } else {
       odometry = scan_matcher_->deadReckon(raw_odometry);
+      if (local_matcher_) local_pose_ = local_matcher_->deadReckon(raw_odometry);
     }
   }
   if (!usable) {
@@ -323,6 +341,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
         out->outcome = ScanOutcome::kRejectedOdometryJump;
         message << "; odometry re-anchored, the increment is discarded";
         last_odometry_ = odometry;  // re-anchor: later increments start from here
+        last_local_pose_ = local_pose_;
         last_raw_odometry_ = current_raw_odometry_;
         last_stamp_ = stamp;
       } else {
@@ -336,7 +355,9 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     }
     recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
   }
+  const Pose2 local_motion = between(last_local_pose_, local_pose_);
   last_odometry_ = odometry;
+  last_local_pose_ = local_pose_;
   last_raw_odometry_ = current_raw_odometry_;
   last_stamp_ = stamp;
 
@@ -381,7 +402,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   if (options_.landmarks == LandmarkSet::kPointsAndMecp) updateMecp(*out);
   recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
   full_recorder_.addIteration(stamp, filter_, predict ? &control : nullptr, out->observations,
-                              out->iteration);
+                              out->iteration, local_matcher_ ? &local_motion : nullptr);
 
   ++counters_.iterations;
   if (out->iteration.update_status != FilterStatus::kOk) ++counters_.update_failures;

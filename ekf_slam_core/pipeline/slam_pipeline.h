@@ -380,9 +380,14 @@ class SlamPipeline {
 
   PipelineOptions options_;
   std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
-  std::unique_ptr<LoopClosureBackEnd> back_end_;        // null when loop closure is off
-  std::unique_ptr<LineLandmarks> lines_;                // null with points only
-  std::unique_ptr<RoomGate> room_gate_;                 // rooms.enabled, once a rebuild found rooms
+  // The full smoother's motion edges (FullSmootherOptions::motion_edges):
+  // null unless they come from a local matcher beside a global front end.
+  std::unique_ptr<ScanMatchingOdometry> local_matcher_;
+  Pose2 local_pose_;       // the local matcher's pose at the scan being processed
+  Pose2 last_local_pose_;  // … and at the last iteration (or re-anchor)
+  std::unique_ptr<LoopClosureBackEnd> back_end_;  // null when loop closure is off
+  std::unique_ptr<LineLandmarks> lines_;          // null with points only
+  std::unique_ptr<RoomGate> room_gate_;           // rooms.enabled, once a rebuild found rooms
   long iterations_since_rooms_ = 0;
   // rooms.enabled: per point landmark id, where the laser was when it was created
   std::unordered_map<int, Vector2> landmark_seen_from_;

@@ -21,6 +21,19 @@ std::string ScanMatcherOptions::validate() const {
 // ---------------------------------------------------------------------------
 // Reference point set
 
+bool fitNormal(const Vector2& sum, const Matrix2& sum_sq, int n, Vector2* normal) {
+  // Three points (the point and two neighbours) are the fewest that say
+  // whether they lie on a line.
+  if (n < 3) return false;
+  const Vector2 mean = sum / n;
+  const Matrix2 covariance = sum_sq / n - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance);
+  // A blob with no dominant direction (both spreads alike) has no tangent line.
+  if (eigen.eigenvalues()(0) > 0.25 * eigen.eigenvalues()(1)) return false;
+  *normal = eigen.eigenvectors().col(0).normalized();
+  return true;
+}
+
 PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, double normal_radius,
                                          double cell_size)
     : cell_size_(cell_size) {
@@ -51,16 +64,10 @@ PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, dou
         }
       }
     }
-    // Three points (the point and two neighbours) are the fewest that say
-    // whether they lie on a line.
-    if (n < 3) continue;
-    const Vector2 mean = sum / n;
-    const Matrix2 covariance = sum_sq / n - mean * mean.transpose();
-    const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance);
-    // A blob with no dominant direction (both spreads alike) has no tangent line.
-    if (eigen.eigenvalues()(0) > 0.25 * eigen.eigenvalues()(1)) continue;
+    Vector2 normal;
+    if (!fitNormal(sum, sum_sq, n, &normal)) continue;
     kept_points.push_back(p);
-    kept_normals.push_back(eigen.eigenvectors().col(0).normalized());
+    kept_normals.push_back(normal);
   }
   points_ = std::move(kept_points);
   normals_ = std::move(kept_normals);
@@ -140,6 +147,117 @@ int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
     }
   }
   return best;
+}
+
+// ---------------------------------------------------------------------------
+// Sliding local map
+
+SlidingNormals::SlidingNormals(double normal_radius)
+    : radius2_(normal_radius * normal_radius), cell_size_(normal_radius) {}
+
+SlidingNormals::CellKey SlidingNormals::cellKey(int ix, int iy) const {
+  const uint64_t high = static_cast<uint64_t>(static_cast<uint32_t>(ix)) << 32;
+  return static_cast<CellKey>(high | static_cast<uint32_t>(iy));
+}
+
+void SlidingNormals::cellOf(const Vector2& p, int* ix, int* iy) const {
+  *ix = static_cast<int>(std::floor(p.x() / cell_size_));
+  *iy = static_cast<int>(std::floor(p.y() / cell_size_));
+}
+
+template <class F>
+void SlidingNormals::forNeighbours(const Vector2& p, F f) {
+  int cx, cy;
+  cellOf(p, &cx, &cy);
+  for (int ix = cx - 1; ix <= cx + 1; ++ix) {
+    for (int iy = cy - 1; iy <= cy + 1; ++iy) {
+      const auto it = grid_.find(cellKey(ix, iy));
+      if (it == grid_.end()) continue;
+      for (const Entry& e : it->second) {
+        Point& q = at(e);
+        if ((q.p - p).squaredNorm() <= radius2_) f(e, q);
+      }
+    }
+  }
+}
+
+void SlidingNormals::push(const std::vector<Vector2>& points) {
+  const long serial = front_serial_ + static_cast<long>(scans_.size());
+  scans_.emplace_back();
+  std::vector<Point>& scan = scans_.back();
+  scan.reserve(points.size());
+  for (const Vector2& p : points) {
+    Point point;
+    point.p = p;
+    scan.push_back(point);
+  }
+  for (int i = 0; i < static_cast<int>(scan.size()); ++i) {
+    int ix, iy;
+    cellOf(scan[i].p, &ix, &iy);
+    grid_[cellKey(ix, iy)].emplace_back(serial, i);
+  }
+  // Each entering point sums its neighbours (itself and the other entering
+  // points included) and adds itself to the sums of the points already in.
+  for (Point& point : scan) {
+    const Vector2 p = point.p;
+    const Matrix2 pp = p * p.transpose();
+    forNeighbours(p, [&](const Entry& e, Point& q) {
+      point.sum += q.p;
+      point.sum_sq += q.p * q.p.transpose();
+      ++point.n;
+      if (e.first != serial) {
+        q.sum += p;
+        q.sum_sq += pp;
+        ++q.n;
+        q.stale = true;
+      }
+    });
+  }
+}
+
+void SlidingNormals::popOldest() {
+  if (scans_.empty()) return;
+  const long serial = front_serial_;
+  for (const Point& point : scans_.front()) {
+    const Vector2 p = point.p;
+    const Matrix2 pp = p * p.transpose();
+    forNeighbours(p, [&](const Entry& e, Point& q) {
+      if (e.first == serial) return;
+      q.sum -= p;
+      q.sum_sq -= pp;
+      --q.n;
+      q.stale = true;
+    });
+  }
+  for (const Point& point : scans_.front()) {
+    int ix, iy;
+    cellOf(point.p, &ix, &iy);
+    const auto it = grid_.find(cellKey(ix, iy));
+    if (it == grid_.end()) continue;
+    auto& entries = it->second;
+    entries.erase(std::remove_if(entries.begin(), entries.end(),
+                                 [serial](const Entry& e) { return e.first == serial; }),
+                  entries.end());
+    if (entries.empty()) grid_.erase(it);
+  }
+  scans_.pop_front();
+  ++front_serial_;
+}
+
+void SlidingNormals::fitted(std::vector<Vector2>* points, std::vector<Vector2>* normals) const {
+  points->clear();
+  normals->clear();
+  for (const std::vector<Point>& scan : scans_) {
+    for (const Point& point : scan) {
+      if (point.stale) {
+        point.has_normal = fitNormal(point.sum, point.sum_sq, point.n, &point.normal);
+        point.stale = false;
+      }
+      if (!point.has_normal) continue;
+      points->push_back(point.p);
+      normals->push_back(point.normal);
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -254,7 +372,8 @@ ScanMatchingOdometry::ScanMatchingOdometry(const ScanMatcherOptions& options,
       wheel_noise_(wheel_noise),
       odometry_gate_(options.odometry_gate_probability > 0.0
                          ? chiSquareQuantile(options.odometry_gate_probability, 3.0)
-                         : 0.0) {}
+                         : 0.0),
+      local_map_(options.normal_radius) {}
 
 bool ScanMatchingOdometry::isOdometryJump(const Pose2& raw_odometry, double max_translation,
                                           double max_rotation) const {
@@ -303,17 +422,19 @@ void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const 
     reference_->insert(scan.points(), scan.normals(), options_.map_point_spacing);
     return;
   }
-  key_scans_.push_back(std::move(placed));
-  if (static_cast<int>(key_scans_.size()) > options_.local_map_scans) {
-    key_scans_.erase(key_scans_.begin());
+  // Local: the last local_map_scans key scans, every point kept, the
+  // normals fitted over all of them.
+  local_map_.push(placed);
+  while (static_cast<int>(local_map_.scanCount()) > options_.local_map_scans) {
+    local_map_.popOldest();
   }
-  reference_points_.clear();
-  for (const auto& scan : key_scans_) {
-    reference_points_.insert(reference_points_.end(), scan.begin(), scan.end());
-  }
-  reference_ = std::make_unique<PointCloudReference>(reference_points_, options_.normal_radius,
-                                                     options_.initial_correspondence_distance);
-  last_key_pose_ = pose;
+  std::vector<Vector2> points_with_normals, normals;
+  local_map_.fitted(&points_with_normals, &normals);
+  // Several key scans lie over one another: cells of the normal radius
+  // hold fewer points to compare than the global map's.
+  reference_ = std::make_unique<PointCloudReference>(std::vector<Vector2>(), options_.normal_radius,
+                                                     options_.normal_radius);
+  reference_->insert(points_with_normals, normals, options_.map_point_spacing);
 }
 
 Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,

@@ -24,9 +24,11 @@
 // final estimate uses only close pairs.
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/geometry/option_fields.h"
@@ -176,6 +178,53 @@ MatchResult matchPoints(const std::vector<Vector2>& points, const PointCloudRefe
 std::vector<Vector2> scanPointsInRobotFrame(const Scan& scan, const Pose2& laser_pose,
                                             const ScanMatcherOptions& options);
 
+// A reference normal from the sums over a point's neighbours within the
+// normal radius, the point itself included: the principal axis of least
+// spread. False with fewer than three points (too few to say whether they
+// lie on a line) or without a dominant direction.
+bool fitNormal(const Vector2& sum, const Matrix2& sum_sq, int n, Vector2* normal);
+
+// The local map's points with the sums over their neighbourhoods, kept up
+// to date as key scans enter (newest) and leave (oldest). The normals are
+// those PointCloudReference fits over all the points together; a key scan
+// costs the neighbour searches of its own points and of the leaving ones,
+// not of the whole map's.
+class SlidingNormals {
+ public:
+  explicit SlidingNormals(double normal_radius);
+  void push(const std::vector<Vector2>& points);
+  void popOldest();
+  size_t scanCount() const { return scans_.size(); }
+  // The points that have a normal, oldest key scan first, and the normals.
+  void fitted(std::vector<Vector2>* points, std::vector<Vector2>* normals) const;
+
+ private:
+  struct Point {
+    Vector2 p;
+    Vector2 sum = Vector2::Zero();
+    Matrix2 sum_sq = Matrix2::Zero();
+    int n = 0;
+    // The normal fitted from the sums, refitted only after they change.
+    mutable bool stale = true;
+    mutable bool has_normal = false;
+    mutable Vector2 normal = Vector2::Zero();
+  };
+  using CellKey = long long;
+  using Entry = std::pair<long, int>;  // (key scan serial, point index)
+  CellKey cellKey(int ix, int iy) const;
+  void cellOf(const Vector2& p, int* ix, int* iy) const;
+  Point& at(const Entry& e) { return scans_[e.first - front_serial_][e.second]; }
+  // Calls f(entry, point) for every point within the normal radius of p.
+  template <class F>
+  void forNeighbours(const Vector2& p, F f);
+
+  double radius2_;
+  double cell_size_;  // the normal radius: its 3 × 3 cells hold every neighbour
+  long front_serial_ = 0;
+  std::deque<std::vector<Point>> scans_;
+  std::unordered_map<CellKey, std::vector<Entry>> grid_;
+};
+
 struct ScanMatcherCounters {
   long matched = 0;
   long refused = 0;                // fell back to the odometry increment (every reason)
@@ -237,8 +286,7 @@ class ScanMatchingOdometry {
   double last_stamp_ = 0.0;  // of the last scan processed
   Pose2 last_corrected_;
   Pose2 last_key_pose_;
-  std::vector<std::vector<Vector2>> key_scans_;  // points in the corrected frame
-  std::vector<Vector2> reference_points_;
+  SlidingNormals local_map_;  // local mode: the last key scans, in the corrected frame
   std::unique_ptr<PointCloudReference> reference_;
 };
 

@@ -53,6 +53,45 @@ TEST(PointCloudReference, NormalsOfAStraightWallArePerpendicularToIt) {
   EXPECT_EQ(reference.nearest(Vector2(0.0, 3.0), 0.2), -1);  // beyond the gate
 }
 
+// The sliding local map keeps, as key scans enter and leave, the normals a
+// reference fitted over the window's points at once would have.
+TEST(SlidingNormals, KeepsTheNormalsOfTheWholeWindow) {
+  const sim::PolygonWorld world = room();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  const ScanMatcherOptions options;
+  std::mt19937 rng(7);
+  constexpr int kWindow = 4;
+  SlidingNormals sliding(options.normal_radius);
+  std::vector<std::vector<Vector2>> window;
+  for (int i = 0; i < 9; ++i) {
+    const Pose2 robot(-3.0 + 0.3 * i, 0.2 * std::sin(i), 0.15 * i);
+    std::vector<Vector2> placed;
+    for (const Vector2& p :
+         scanPointsInRobotFrame(sweep(world, robot, laser, &rng), laser, options)) {
+      placed.push_back(transformFrom(robot, p));
+    }
+    sliding.push(placed);
+    window.push_back(placed);
+    if (window.size() > kWindow) {
+      sliding.popOldest();
+      window.erase(window.begin());
+    }
+    ASSERT_EQ(sliding.scanCount(), window.size());
+    std::vector<Vector2> all;
+    for (const auto& scan : window) all.insert(all.end(), scan.begin(), scan.end());
+    const PointCloudReference whole(all, options.normal_radius, 0.5);
+    std::vector<Vector2> points, normals;
+    sliding.fitted(&points, &normals);
+    ASSERT_EQ(points.size(), whole.size()) << "key scan " << i;
+    ASSERT_GT(points.size(), 100u);
+    for (size_t k = 0; k < points.size(); ++k) {
+      EXPECT_EQ(points[k], whole.points()[k]);
+      // A normal's sign is arbitrary.
+      EXPECT_NEAR(std::abs(normals[k].dot(whole.normals()[k])), 1.0, 1e-9) << "point " << k;
+    }
+  }
+}
+
 TEST(PointCloudReference, IsolatedPointsGetNoNormalAndAreDropped) {
   const PointCloudReference reference({Vector2(0, 0), Vector2(5, 5), Vector2(-3, 2)}, 0.25, 0.5);
   EXPECT_EQ(reference.size(), 0u);

@@ -38,7 +38,7 @@ void FullSmootherRecorder::setPrior(const Pose2& mean, const Matrix3& covariance
 void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
                                         const OdometryControl* control,
                                         const std::vector<PointObservation>& observations,
-                                        const IterationReport& report) {
+                                        const IterationReport& report, const Pose2* local_motion) {
   SmootherIteration it;
   it.stamp = stamp;
   it.filtered = filter.pose();
@@ -46,6 +46,7 @@ void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
     it.has_control = true;
     it.control = *control;
     it.control_covariance = controlCovariance(*control, filter.options().motion_noise);
+    it.motion = local_motion != nullptr ? *local_motion : applyControl(Pose2(), *control);
   }
   // The update refuses as a whole, and then report.matches is empty: only
   // what the filter really used enters.
@@ -368,7 +369,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
       RelativePoseEdge motion;
       motion.from = k - 1;
       motion.to = k;
-      motion.measurement = applyControl(Pose2(), it.control);
+      motion.measurement = it.motion;
       motion.information = motionEdgeCovariance(it.control, it.control_covariance).inverse();
       graph.addEdge(motion);
     }
