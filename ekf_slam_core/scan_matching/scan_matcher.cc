@@ -74,16 +74,27 @@ PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, dou
   buildGrid();
 }
 
-PointCloudReference::CellKey PointCloudReference::key(int ix, int iy) const {
-  // The same bits as ix · 2³² + iy mod 2⁶⁴, shifted as unsigned: shifting a
-  // negative signed value is undefined.
+namespace {
+// The hash grids' cell of p and its key: the same bits as ix · 2³² + iy
+// mod 2⁶⁴, shifted as unsigned (shifting a negative signed value is
+// undefined).
+void gridCell(const Vector2& p, double cell_size, int* ix, int* iy) {
+  *ix = static_cast<int>(std::floor(p.x() / cell_size));
+  *iy = static_cast<int>(std::floor(p.y() / cell_size));
+}
+
+long long gridKey(int ix, int iy) {
   const uint64_t high = static_cast<uint64_t>(static_cast<uint32_t>(ix)) << 32;
-  return static_cast<CellKey>(high | static_cast<uint32_t>(iy));
+  return static_cast<long long>(high | static_cast<uint32_t>(iy));
+}
+}  // namespace
+
+PointCloudReference::CellKey PointCloudReference::key(int ix, int iy) const {
+  return gridKey(ix, iy);
 }
 
 void PointCloudReference::cellOf(const Vector2& p, int* ix, int* iy) const {
-  *ix = static_cast<int>(std::floor(p.x() / cell_size_));
-  *iy = static_cast<int>(std::floor(p.y() / cell_size_));
+  gridCell(p, cell_size_, ix, iy);
 }
 
 void PointCloudReference::addToGrid(int index) {
@@ -155,14 +166,10 @@ int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
 SlidingNormals::SlidingNormals(double normal_radius)
     : radius2_(normal_radius * normal_radius), cell_size_(normal_radius) {}
 
-SlidingNormals::CellKey SlidingNormals::cellKey(int ix, int iy) const {
-  const uint64_t high = static_cast<uint64_t>(static_cast<uint32_t>(ix)) << 32;
-  return static_cast<CellKey>(high | static_cast<uint32_t>(iy));
-}
+SlidingNormals::CellKey SlidingNormals::cellKey(int ix, int iy) const { return gridKey(ix, iy); }
 
 void SlidingNormals::cellOf(const Vector2& p, int* ix, int* iy) const {
-  *ix = static_cast<int>(std::floor(p.x() / cell_size_));
-  *iy = static_cast<int>(std::floor(p.y() / cell_size_));
+  gridCell(p, cell_size_, ix, iy);
 }
 
 template <class F>
