@@ -136,6 +136,7 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       lines_(lineLandmarksFor(options)),
       filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance) {
   full_recorder_.setPrior(options.initial_pose, options.initial_pose_covariance);
+  counters_.local_matcher_runs = local_matcher_ != nullptr;
 }
 
 Pose2 SlamPipeline::deadReckoned(const Pose2& odometry) const {
@@ -244,6 +245,8 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       MatchResult match;
       odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
       counters_.scan_match_unchecked = scan_matcher_->counters().unchecked_by_odometry;
+      counters_.front_end = scan_matcher_->counters();
+      if (local_matcher_) counters_.local_matcher = local_matcher_->counters();
       if (match.ok) {
         ++counters_.scan_matches;
       } else {

@@ -235,7 +235,13 @@ struct PipelineCounters {
   long scan_matches = 0;          // scans aligned by the scan matcher
   long scan_match_refusals = 0;   // scans that fell back to the odometry increment
   long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
-  long scan_match_unchecked = 0;   // matches not checked against the wheels (stamp not increasing)
+  long scan_match_unchecked = 0;  // matches not checked against the wheels (stamp not increasing)
+  // Each scan matcher's own counts, refusals by reason: the front end's,
+  // and the local matcher's that measures the full smoother's motion edges
+  // (smoother.motion_edges: local_match) when it runs.
+  ScanMatcherCounters front_end;
+  bool local_matcher_runs = false;
+  ScanMatcherCounters local_matcher;
   long reanchors = 0;              // times the filter took the loop-closed geometry
   long room_rebuilds = 0;          // rooms.enabled: times the rooms were rebuilt …
   long room_rebuild_failures = 0;  // … and found no usable map (no walls yet, too large)

@@ -198,6 +198,44 @@ TEST(SlamPipeline, SmootherMotionEdgesComeFromTheLocalMatcherWhenAsked) {
   EXPECT_GT(differs, 20);
 }
 
+// Both scan matchers count their refusals, each with its reason: a scan with
+// no return at all cannot be matched by either. The front end's counts
+// agree with the pipeline's own; the local matcher's are there only when it
+// runs.
+TEST(SlamPipeline, BothScanMatchersCountTheirRefusalsWithTheReason) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  for (const SmootherMotion motion_edges :
+       {SmootherMotion::kLocalMatch, SmootherMotion::kControl}) {
+    PipelineOptions options = defaultOptions(laser, /*scan_matching=*/true);
+    options.smoother.motion_edges = motion_edges;
+    SlamPipeline pipeline(options);
+    std::mt19937 rng(5);
+    Pose2 robot;
+    for (int i = 0; i < 12; ++i) {
+      Scan scan = scanAt(world, compose(robot, laser), 10.0 + 0.1 * i, &rng);
+      if (i == 6 || i == 9) std::fill(scan.ranges.begin(), scan.ranges.end(), scan.range_max);
+      EXPECT_EQ(pipeline.processScan(scan, robot).outcome, ScanOutcome::kIterated) << "scan " << i;
+      robot = compose(robot, Pose2(0.05, 0.0, 0.0));
+    }
+    const PipelineCounters& c = pipeline.counters();
+    EXPECT_EQ(c.scan_match_refusals, 2);
+    EXPECT_EQ(c.front_end.refused, 2);
+    EXPECT_EQ(c.front_end.refused_by_fit, 2);
+    EXPECT_EQ(c.front_end.refused_by_correction + c.front_end.refused_by_odometry, 0);
+    EXPECT_EQ(c.front_end.matched, 9);  // the first scan starts the map
+    if (motion_edges == SmootherMotion::kLocalMatch) {
+      EXPECT_TRUE(c.local_matcher_runs);
+      EXPECT_EQ(c.local_matcher.refused, 2);
+      EXPECT_EQ(c.local_matcher.refused_by_fit, 2);
+      EXPECT_EQ(c.local_matcher.matched, 9);
+    } else {
+      EXPECT_FALSE(c.local_matcher_runs);
+      EXPECT_EQ(c.local_matcher.matched + c.local_matcher.refused, 0);
+    }
+  }
+}
+
 // Map management: landmarks with too few sightings for their age go; the
 // well-seen ones stay.
 TEST(SlamPipeline, RarelySeenLandmarksArePrunedOnceOldEnough) {

@@ -467,6 +467,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
   const Pose2 guess = compose(last_corrected_, between(last_raw_, raw_odometry));
   Pose2 corrected = guess;
   match = matchPoints(points, *reference_, guess, options_);
+  if (!match.ok) ++counters_.refused_by_fit;
   if (match.ok) {
     const Pose2 correction = between(guess, match.pose);
     if (std::hypot(correction.x, correction.y) > options_.max_correction_translation ||
@@ -476,6 +477,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
         << radToDeg(correction.theta) << " deg) beyond max_correction_*";
       match.ok = false;
       match.message = m.str();
+      ++counters_.refused_by_correction;
     } else if (odometry_gate_ > 0.0 && !(scan.stamp > last_stamp_)) {
       ++counters_.unchecked_by_odometry;  // the wheels' increment is not this step's
       corrected = match.pose;

@@ -227,8 +227,10 @@ class SlidingNormals {
 
 struct ScanMatcherCounters {
   long matched = 0;
-  long refused = 0;                // fell back to the odometry increment (every reason)
-  long refused_by_odometry = 0;    // of those, refused by the check against the wheels
+  long refused = 0;                // fell back to the odometry increment, for one of three reasons:
+  long refused_by_fit = 0;         // too few points, point pairs or inliers
+  long refused_by_correction = 0;  // a change of the odometry guess beyond max_correction_*
+  long refused_by_odometry = 0;    // the check against the wheels
   long unchecked_by_odometry = 0;  // matches not checked: stamp not after the previous scan's
   long key_scans = 0;
 };

@@ -281,6 +281,9 @@ TEST(ScanMatchingOdometry, AnEmptyScanFallsBackToTheOdometryIncrement) {
   const Pose2 corrected = matcher.process(empty, odometry, Pose2(), &result);
   EXPECT_FALSE(result.ok);
   EXPECT_EQ(matcher.counters().refused, 1);
+  EXPECT_EQ(matcher.counters().refused_by_fit, 1);  // the reason: nothing to pair
+  EXPECT_EQ(matcher.counters().refused_by_correction, 0);
+  EXPECT_EQ(matcher.counters().refused_by_odometry, 0);
   EXPECT_NEAR(corrected.x, 0.2, 1e-12);
   EXPECT_NEAR(corrected.theta, 0.05, 1e-12);
 }
@@ -345,7 +348,41 @@ TEST(ScanMatchingOdometry, AScanStampedBeforeThePreviousIsNotCheckedAgainstTheWh
       EXPECT_FALSE(result.ok);
       EXPECT_EQ(matcher.counters().unchecked_by_odometry, 0);
       EXPECT_EQ(matcher.counters().refused_by_odometry, 1);
+      EXPECT_EQ(matcher.counters().refused, 1);  // that reason alone
+      EXPECT_EQ(matcher.counters().refused_by_fit + matcher.counters().refused_by_correction, 0);
       EXPECT_NEAR(corrected.x, 0.0, 1e-9);  // the wheels' increment
+    }
+  }
+}
+
+// The wheels report no motion while the robot was carried 0.3 m (or
+// slipped): the match finds the 0.3 m. With max_correction_translation
+// below it, the match is refused for that reason, counted as such, and the
+// output follows the wheels; above it, the match is taken.
+TEST(ScanMatchingOdometry, ACorrectionBeyondTheBoundIsRefusedAndCountedAsSuch) {
+  const sim::PolygonWorld world = room();
+  for (const double bound : {0.1, 0.5}) {
+    std::mt19937 rng(4);
+    ScanMatcherOptions options;
+    options.max_correction_translation = bound;
+    options.odometry_gate_probability = 0.0;  // the wheels' check would refuse it too
+    ScanMatchingOdometry matcher(options);
+    matcher.process(sweep(world, Pose2(), Pose2(), &rng), Pose2(), Pose2());
+    MatchResult result;
+    const Pose2 corrected = matcher.process(sweep(world, Pose2(0.3, 0.0, 0.0), Pose2(), &rng),
+                                            Pose2(), Pose2(), &result);
+    const ScanMatcherCounters& c = matcher.counters();
+    if (bound < 0.3) {
+      EXPECT_FALSE(result.ok);
+      EXPECT_NE(result.message.find("max_correction"), std::string::npos) << result.message;
+      EXPECT_EQ(c.refused, 1);
+      EXPECT_EQ(c.refused_by_correction, 1);
+      EXPECT_EQ(c.refused_by_fit, 0);
+      EXPECT_NEAR(corrected.x, 0.0, 1e-12);
+    } else {
+      EXPECT_TRUE(result.ok) << result.message;
+      EXPECT_EQ(c.refused, 0);
+      EXPECT_NEAR(corrected.x, 0.3, 0.02);
     }
   }
 }

@@ -222,6 +222,14 @@ std::string exportGraphs(const std::string& dir, const ekf_slam::SlamPipeline& p
   return error;
 }
 
+// "a of them disagreed with the wheels, b corrections beyond max_correction_*,
+// c too few points, pairs or inliers": why a scan matcher's refused matches were refused.
+std::string refusalReasons(const ekf_slam::ScanMatcherCounters& c) {
+  return std::to_string(c.refused_by_odometry) + " of them disagreed with the wheels, " +
+         std::to_string(c.refused_by_correction) + " corrections beyond max_correction_*, " +
+         std::to_string(c.refused_by_fit) + " too few points, pairs or inliers";
+}
+
 std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   if (!closer) return "off";
   const ekf_slam::LoopClosureCounters& c = closer->counters();
@@ -498,14 +506,19 @@ int main(int argc, char** argv) {
          << (config.pipeline.scan_matching.enabled
                  ? std::to_string(c.scan_matches) + " scans matched, " +
                        std::to_string(c.scan_match_refusals) +
-                       " fell back to the odometry increment (" +
-                       std::to_string(c.scan_match_odometry_refusals) +
-                       " of them disagreed with the wheels), " +
-                       std::to_string(c.scan_match_unchecked) +
+                       " fell back to the odometry increment (" + refusalReasons(c.front_end) +
+                       "), " + std::to_string(c.scan_match_unchecked) +
                        " matches not checked against the wheels (stamp not after the "
                        "previous scan's)"
                  : std::string("off (raw odometry is the control)"))
          << "\n"
+         << (c.local_matcher_runs
+                 ? "local matcher (the full smoother's motion edges): " +
+                       std::to_string(c.local_matcher.matched) + " scans matched, " +
+                       std::to_string(c.local_matcher.refused) +
+                       " fell back to the odometry increment (" + refusalReasons(c.local_matcher) +
+                       ")\n"
+                 : std::string())
          << "loop closure: " << loopClosureLine(pipeline.loopCloser())
          << "; the filter re-anchored " << c.reanchors << " times\n"
          << "observations (landmark candidates): " << c.observations << " ("

@@ -47,6 +47,21 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("scan matches refused (disagree with the wheels)",
              counters.scan_match_odometry_refusals);
   status.add("scan matches refused (all reasons)", counters.scan_match_refusals);
+  status.add("scan matches refused (correction beyond the bounds)",
+             counters.front_end.refused_by_correction);
+  status.add("scan matches refused (too few points, pairs or inliers)",
+             counters.front_end.refused_by_fit);
+  if (counters.local_matcher_runs) {
+    // The second matcher, whose moves are the full smoother's motion edges.
+    const ScanMatcherCounters& local = counters.local_matcher;
+    status.add("local matcher: moves refused (all reasons)", local.refused);
+    status.add("local matcher: moves refused (disagree with the wheels)",
+               local.refused_by_odometry);
+    status.add("local matcher: moves refused (correction beyond the bounds)",
+               local.refused_by_correction);
+    status.add("local matcher: moves refused (too few points, pairs or inliers)",
+               local.refused_by_fit);
+  }
   if (pipeline_ && config_.pipeline.loop_closure.enabled) {
     // As the last scan saw the back end (never waits for its thread).
     const LoopClosureCounters loops = pipeline_->backEndCounters();
