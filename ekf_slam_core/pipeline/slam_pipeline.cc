@@ -239,11 +239,15 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
         if (local_matcher_) local_matcher_->reanchorRaw(raw_odometry);
         ++counters_.odometry_jumps;
       }
+      // Both matchers take the scan's points with the same options
+      // (localMatcherFor changes only the map's).
+      const std::vector<Vector2> points =
+          scanPointsInRobotFrame(*scan, options_.filter.laser_pose, options_.scan_matching);
       if (local_matcher_) {
-        local_pose_ = local_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose);
+        local_pose_ = local_matcher_->processPoints(points, scan->stamp, raw_odometry);
       }
       MatchResult match;
-      odometry = scan_matcher_->process(*scan, raw_odometry, options_.filter.laser_pose, &match);
+      odometry = scan_matcher_->processPoints(points, scan->stamp, raw_odometry, &match);
       counters_.scan_match_unchecked = scan_matcher_->counters().unchecked_by_odometry;
       counters_.front_end = scan_matcher_->counters();
       if (local_matcher_) counters_.local_matcher = local_matcher_->counters();

@@ -111,7 +111,7 @@ void PointCloudReference::buildGrid() {
 void PointCloudReference::insert(const std::vector<Vector2>& points,
                                  const std::vector<Vector2>& normals, double min_spacing) {
   for (size_t i = 0; i < points.size(); ++i) {
-    if (min_spacing > 0.0 && nearest(points[i], min_spacing) >= 0) continue;
+    if (min_spacing > 0.0 && anyWithin(points[i], min_spacing)) continue;
     points_.push_back(points[i]);
     normals_.push_back(normals[i]);
     addToGrid(static_cast<int>(points_.size()) - 1);
@@ -158,6 +158,35 @@ int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
     }
   }
   return best;
+}
+
+bool PointCloudReference::anyWithin(const Vector2& p, double distance) const {
+  int cx, cy;
+  cellOf(p, &cx, &cy);
+  const int reach = static_cast<int>(std::ceil(distance / cell_size_));
+  const double d2 = distance * distance;
+  // p's own cell first: where a close point usually is.
+  const auto own = grid_.find(key(cx, cy));
+  if (own != grid_.end()) {
+    for (int j : own->second) {
+      if ((points_[j] - p).squaredNorm() <= d2) return true;
+    }
+  }
+  for (int ix = cx - reach; ix <= cx + reach; ++ix) {
+    const double dx = gapToCell(p.x(), ix, cell_size_);
+    for (int iy = cy - reach; iy <= cy + reach; ++iy) {
+      if (ix == cx && iy == cy) continue;
+      const double dy = gapToCell(p.y(), iy, cell_size_);
+      // The slack covers rounding between cellOf's division and the box's products.
+      if (dx * dx + dy * dy > d2 * (1.0 + 1e-9) + 1e-12) continue;
+      const auto it = grid_.find(key(ix, iy));
+      if (it == grid_.end()) continue;
+      for (int j : it->second) {
+        if ((points_[j] - p).squaredNorm() <= d2) return true;
+      }
+    }
+  }
+  return false;
 }
 
 // ---------------------------------------------------------------------------
@@ -446,7 +475,12 @@ void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const 
 
 Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
                                     const Pose2& laser_pose, MatchResult* result) {
-  const std::vector<Vector2> points = scanPointsInRobotFrame(scan, laser_pose, options_);
+  return processPoints(scanPointsInRobotFrame(scan, laser_pose, options_), scan.stamp, raw_odometry,
+                       result);
+}
+
+Pose2 ScanMatchingOdometry::processPoints(const std::vector<Vector2>& points, double stamp,
+                                          const Pose2& raw_odometry, MatchResult* result) {
   MatchResult local;
   MatchResult& match = result ? *result : local;
   match = MatchResult();
@@ -455,7 +489,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
     // is a drop-in replacement for the odometry pose.
     initialised_ = true;
     last_raw_ = raw_odometry;
-    last_stamp_ = scan.stamp;
+    last_stamp_ = stamp;
     last_corrected_ = raw_odometry;
     addKeyScan(points, raw_odometry);
     match.ok = true;
@@ -478,11 +512,11 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
       match.ok = false;
       match.message = m.str();
       ++counters_.refused_by_correction;
-    } else if (odometry_gate_ > 0.0 && !(scan.stamp > last_stamp_)) {
+    } else if (odometry_gate_ > 0.0 && !(stamp > last_stamp_)) {
       ++counters_.unchecked_by_odometry;  // the wheels' increment is not this step's
       corrected = match.pose;
     } else if (odometry_gate_ > 0.0) {
-      const double d2 = odometryDisagreement(raw_odometry, match.pose, scan.stamp - last_stamp_);
+      const double d2 = odometryDisagreement(raw_odometry, match.pose, stamp - last_stamp_);
       if (d2 > odometry_gate_) {
         std::ostringstream m;
         m << "match disagrees with the wheels: squared Mahalanobis distance " << d2
@@ -506,7 +540,7 @@ Pose2 ScanMatchingOdometry::process(const Scan& scan, const Pose2& raw_odometry,
     ++consecutive_refusals_;
   }
   last_raw_ = raw_odometry;
-  last_stamp_ = scan.stamp;
+  last_stamp_ = stamp;
   last_corrected_ = corrected;
 
   const Pose2 since_key = between(last_key_pose_, corrected);

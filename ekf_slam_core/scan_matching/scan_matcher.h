@@ -142,6 +142,9 @@ class PointCloudReference {
 
   // Index of the nearest point within `max_distance` of p, or -1.
   int nearest(const Vector2& p, double max_distance) const;
+  // Whether any point lies within `distance` of p: nearest(p, distance) >= 0,
+  // answered at the first such point.
+  bool anyWithin(const Vector2& p, double distance) const;
   const std::vector<Vector2>& points() const { return points_; }
   const std::vector<Vector2>& normals() const { return normals_; }
   size_t size() const { return points_.size(); }
@@ -250,6 +253,11 @@ class ScanMatchingOdometry {
   // Corrected odom → base_link for this scan. `laser_pose` is base_link → laser.
   Pose2 process(const Scan& scan, const Pose2& raw_odometry, const Pose2& laser_pose,
                 MatchResult* result = nullptr);
+  // The same for the scan's points in the robot frame as
+  // scanPointsInRobotFrame gives them with this matcher's options, taken
+  // at `stamp` (two matchers of one scan share them).
+  Pose2 processPoints(const std::vector<Vector2>& points, double stamp, const Pose2& raw_odometry,
+                      MatchResult* result = nullptr);
 
   // The corrected pose of a scan that cannot be matched (bad geometry):
   // the last corrected pose moved by the raw odometry increment. No state change.

@@ -100,7 +100,7 @@ TEST(PointCloudReference, IsolatedPointsGetNoNormalAndAreDropped) {
 // The grid search skips cells that cannot hold the answer; it must still
 // find the same distance as looking at every point, for gates of less and
 // more than a cell, near cell edges and far from every point.
-TEST(PointCloudReference, NearestAgreesWithLookingAtEveryPoint) {
+TEST(PointCloudReference, NearestAndAnyWithinAgreeWithLookingAtEveryPoint) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
   std::uniform_real_distribution<double> heading(-kPi, kPi);
@@ -132,6 +132,7 @@ TEST(PointCloudReference, NearestAgreesWithLookingAtEveryPoint) {
     }
     const int j = reference.nearest(q, gate);
     ASSERT_EQ(j >= 0, any) << "query " << q.transpose() << " gate " << gate;
+    ASSERT_EQ(reference.anyWithin(q, gate), any) << "query " << q.transpose() << " gate " << gate;
     if (!any) continue;
     ++found;
     EXPECT_EQ((reference.points()[j] - q).squaredNorm(), best);
