@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 
 namespace ekf_slam {
@@ -60,22 +62,25 @@ bool OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
   if (!(cells_x * cells_y <= options_.max_cells)) return false;
   const int new_width = static_cast<int>(cells_x);
   const int new_height = static_cast<int>(cells_y);
-  std::vector<float> grid(static_cast<size_t>(new_width) * new_height, 0.0f);
-  std::vector<uint8_t> touched(grid.size(), 0);
+  std::vector<float> grid(static_cast<size_t>(new_width) * new_height, -0.0f);
   for (int iy = 0; iy < height_; ++iy) {
     for (int ix = 0; ix < width_; ++ix) {
       const size_t from = static_cast<size_t>(iy) * width_ + ix;
       const size_t to = static_cast<size_t>(iy + shift_y) * new_width + ix + shift_x;
       grid[to] = log_odds_[from];
-      touched[to] = touched_[from];
     }
   }
   origin_ = new_origin;
   width_ = new_width;
   height_ = new_height;
   log_odds_.swap(grid);
-  touched_.swap(touched);
   return true;
+}
+
+bool OccupancyGrid::isUnknown(float log_odds) {
+  uint32_t bits;
+  std::memcpy(&bits, &log_odds, sizeof(bits));
+  return bits == 0x80000000u;
 }
 
 void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
@@ -88,7 +93,6 @@ void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
   while (x != x1 || y != y1) {
     float& cell = at(x, y);
     cell = std::max(-clamp, cell + log_miss_);
-    touched_[static_cast<size_t>(y) * width_ + x] = 1;
     const int e2 = 2 * err;
     if (e2 >= dy) {
       err += dy;
@@ -101,7 +105,6 @@ void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
   }
   float& end = at(x1, y1);
   end = mark_end ? std::min(clamp, end + log_hit_) : std::max(-clamp, end + log_miss_);
-  touched_[static_cast<size_t>(y1) * width_ + x1] = 1;
 }
 
 void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
@@ -154,13 +157,13 @@ double OccupancyGrid::probability(double x, double y) const {
 
 bool OccupancyGrid::isKnown(double x, double y) const {
   int ix, iy;
-  return cellOf(x, y, &ix, &iy) && touched_[static_cast<size_t>(iy) * width_ + ix];
+  return cellOf(x, y, &ix, &iy) && !isUnknown(at(ix, iy));
 }
 
 std::vector<int8_t> OccupancyGrid::occupancyValues() const {
   std::vector<int8_t> out(log_odds_.size(), -1);
   for (size_t i = 0; i < out.size(); ++i) {
-    if (!touched_[i]) continue;
+    if (isUnknown(log_odds_[i])) continue;
     const double p = 1.0 - 1.0 / (1.0 + std::exp(static_cast<double>(log_odds_[i])));
     out[i] = static_cast<int8_t>(std::lround(100.0 * p));
   }
@@ -172,7 +175,7 @@ std::vector<int8_t> OccupancyGrid::trinaryValues() const {
   const float occupied = static_cast<float>(logOdds(0.65));
   const float free = static_cast<float>(logOdds(0.196));
   for (size_t i = 0; i < out.size(); ++i) {
-    if (!touched_[i]) continue;
+    if (isUnknown(log_odds_[i])) continue;
     if (log_odds_[i] > occupied) {
       out[i] = 100;
     } else if (log_odds_[i] < free) {
@@ -194,7 +197,7 @@ std::string OccupancyGrid::save(const std::string& base_path) const {
   std::vector<uint8_t> row(w);
   for (int iy = h - 1; iy >= 0; --iy) {
     for (int ix = 0; ix < w; ++ix) {
-      if (ix >= width_ || iy >= height_ || !touched_[static_cast<size_t>(iy) * width_ + ix]) {
+      if (ix >= width_ || iy >= height_ || isUnknown(at(ix, iy))) {
         row[ix] = 205;
         continue;
       }

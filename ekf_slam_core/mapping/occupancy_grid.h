@@ -98,13 +98,17 @@ class OccupancyGrid {
   void traceRay(int x0, int y0, int x1, int y1, bool mark_end);
   float& at(int ix, int iy) { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
   float at(int ix, int iy) const { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
+  static bool isUnknown(float log_odds);  // the −0.0 of a cell no ray touched
 
   OccupancyGridOptions options_;
   float log_hit_ = 0.0f, log_miss_ = 0.0f;
   Vector2 origin_ = Vector2::Zero();
   int width_ = 0, height_ = 0;
-  std::vector<float> log_odds_;  // 0 = unknown
-  std::vector<uint8_t> touched_;
+  // Log-odds per cell. A cell no ray has touched holds −0.0, which no
+  // update can produce (x + y is −0.0 only when both are, and the clamp is
+  // never zero): the first update adds to it as to 0, and an unknown cell
+  // costs no flag of its own (a fifth less memory on a large map).
+  std::vector<float> log_odds_;
   long rays_beyond_limit_ = 0;
 };
 

@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <string>
 
 #include "ekf_slam_core/sim/polygon_world.h"
 
@@ -157,6 +160,31 @@ TEST(OccupancyGrid, HitsGivenAsEndPointsMarkFreeSpaceAndTheEnd) {
   EXPECT_LT(grid.probability(2.0, 1.01), 0.5);
   EXPECT_FALSE(grid.isKnown(3.6, 1.01));
   EXPECT_FALSE(grid.isKnown(1.01, 4.0));  // the 8 m reading was not inserted
+}
+
+// A cell whose hits and misses cancel to a log-odds of exactly 0 is known
+// (p = 0.5, grey 127 in the file), not unknown (205): with a hit of
+// log-odds +l and a miss of −l, one of each sums to 0. Unknown cells have
+// no flag of their own, so this tells them apart.
+TEST(OccupancyGrid, ACellWhoseEvidenceCancelsIsKnownNotUnknown) {
+  OccupancyGridOptions options;
+  options.hit_probability = 0.6;
+  options.miss_probability = 0.4;
+  OccupancyGrid grid(options);
+  const Vector2 origin(0.0, 0.0);
+  grid.insertHits(origin, {Vector2(1.0, 0.01)});  // a hit at 1 m ...
+  grid.insertHits(origin, {Vector2(2.0, 0.01)});  // ... then a beam through it
+  EXPECT_EQ(grid.probability(1.0, 0.01), 0.5);
+  EXPECT_TRUE(grid.isKnown(1.0, 0.01));
+  EXPECT_FALSE(grid.isKnown(1.0, 1.0));
+  int known_at_half = 0;
+  for (int8_t v : grid.occupancyValues()) known_at_half += v == 50;
+  EXPECT_EQ(known_at_half, 1);
+  const std::string base = ::testing::TempDir() + "cancelling_cell";
+  ASSERT_EQ(grid.save(base), "");
+  std::ifstream pgm(base + ".pgm", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(pgm)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(std::count(bytes.begin(), bytes.end(), static_cast<char>(127)), 1);
 }
 
 }  // namespace
