@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "ekf_slam_core/filter/chi_square.h"
@@ -53,9 +54,9 @@ PointCloudReference::PointCloudReference(const std::vector<Vector2>& points, dou
     int n = 0;
     for (int ix = cx - reach; ix <= cx + reach; ++ix) {
       for (int iy = cy - reach; iy <= cy + reach; ++iy) {
-        const auto it = grid_.find(key(ix, iy));
-        if (it == grid_.end()) continue;
-        for (int j : it->second) {
+        const std::vector<int>* members = cell(ix, iy);
+        if (!members) continue;
+        for (int j : *members) {
           const Vector2& q = points_[j];
           if ((q - p).squaredNorm() > radius2) continue;
           sum += q;
@@ -97,14 +98,79 @@ void PointCloudReference::cellOf(const Vector2& p, int* ix, int* iy) const {
   gridCell(p, cell_size_, ix, iy);
 }
 
+// ---------------------------------------------------------------------------
+// Cell index
+
+size_t CellIndex::slotOf(Key key) const {
+  // Fibonacci hashing: the top bits of the key times 2⁶⁴/φ spread
+  // neighbouring cells over the table.
+  return static_cast<size_t>((static_cast<uint64_t>(key) * 0x9E3779B97F4A7C15ull) >> shift_);
+}
+
+int CellIndex::find(Key key) const {
+  if (cells_.empty()) return -1;
+  const size_t mask = cells_.size() - 1;
+  for (size_t slot = slotOf(key);; slot = (slot + 1) & mask) {
+    if (cells_[slot] < 0) return -1;
+    if (keys_[slot] == key) return cells_[slot];
+  }
+}
+
+int CellIndex::findOrAdd(Key key) {
+  if (2 * (count_ + 1) > static_cast<int>(cells_.size())) grow();
+  const size_t mask = cells_.size() - 1;
+  size_t slot = slotOf(key);
+  for (; cells_[slot] >= 0; slot = (slot + 1) & mask) {
+    if (keys_[slot] == key) return cells_[slot];
+  }
+  keys_[slot] = key;
+  cells_[slot] = count_;
+  return count_++;
+}
+
+void CellIndex::grow() {
+  const std::vector<Key> keys = std::move(keys_);
+  const std::vector<int> cells = std::move(cells_);
+  const size_t size = std::max<size_t>(16, 2 * cells.size());
+  keys_.assign(size, 0);
+  cells_.assign(size, -1);
+  shift_ = 64;
+  for (size_t s = size; s > 1; s >>= 1) --shift_;
+  const size_t mask = size - 1;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i] < 0) continue;
+    size_t slot = slotOf(keys[i]);
+    while (cells_[slot] >= 0) slot = (slot + 1) & mask;
+    keys_[slot] = keys[i];
+    cells_[slot] = cells[i];
+  }
+}
+
+void CellIndex::clear() {
+  keys_.clear();
+  cells_.clear();
+  count_ = 0;
+  shift_ = 64;
+}
+
+// ---------------------------------------------------------------------------
+
+const std::vector<int>* PointCloudReference::cell(int ix, int iy) const {
+  const int c = cell_index_.find(key(ix, iy));
+  return c < 0 ? nullptr : &cells_[c];
+}
+
 void PointCloudReference::addToGrid(int index) {
   int ix, iy;
   cellOf(points_[index], &ix, &iy);
-  grid_[key(ix, iy)].push_back(index);
+  const int c = cell_index_.findOrAdd(key(ix, iy));
+  if (c == static_cast<int>(cells_.size())) cells_.emplace_back();
+  cells_[c].push_back(index);
 }
 
 void PointCloudReference::buildGrid() {
-  grid_.clear();
+  cell_index_.clear();
+  cells_.clear();
   for (int i = 0; i < static_cast<int>(points_.size()); ++i) addToGrid(i);
 }
 
@@ -133,9 +199,9 @@ int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
   // covers rounding between cellOf's division and the box's products;
   // the cells are searched in their usual order, so ties go as before.)
   double bound = max_distance * max_distance;
-  const auto own = grid_.find(key(cx, cy));
-  if (own != grid_.end()) {
-    for (int j : own->second) bound = std::min(bound, (points_[j] - p).squaredNorm());
+  const std::vector<int>* own = cell(cx, cy);
+  if (own) {
+    for (int j : *own) bound = std::min(bound, (points_[j] - p).squaredNorm());
   }
   bound = bound * (1.0 + 1e-9) + 1e-12;
   int best = -1;
@@ -146,9 +212,9 @@ int PointCloudReference::nearest(const Vector2& p, double max_distance) const {
     for (int iy = cy - reach; iy <= cy + reach; ++iy) {
       const double dy = gapToCell(p.y(), iy, cell_size_);
       if (dx * dx + dy * dy > bound) continue;
-      const auto it = ix == cx && iy == cy ? own : grid_.find(key(ix, iy));
-      if (it == grid_.end()) continue;
-      for (int j : it->second) {
+      const std::vector<int>* members = ix == cx && iy == cy ? own : cell(ix, iy);
+      if (!members) continue;
+      for (int j : *members) {
         const double d2 = (points_[j] - p).squaredNorm();
         if (d2 <= best_d2) {
           best_d2 = d2;
@@ -166,9 +232,9 @@ bool PointCloudReference::anyWithin(const Vector2& p, double distance) const {
   const int reach = static_cast<int>(std::ceil(distance / cell_size_));
   const double d2 = distance * distance;
   // p's own cell first: where a close point usually is.
-  const auto own = grid_.find(key(cx, cy));
-  if (own != grid_.end()) {
-    for (int j : own->second) {
+  const std::vector<int>* own = cell(cx, cy);
+  if (own) {
+    for (int j : *own) {
       if ((points_[j] - p).squaredNorm() <= d2) return true;
     }
   }
@@ -179,9 +245,9 @@ bool PointCloudReference::anyWithin(const Vector2& p, double distance) const {
       const double dy = gapToCell(p.y(), iy, cell_size_);
       // The slack covers rounding between cellOf's division and the box's products.
       if (dx * dx + dy * dy > d2 * (1.0 + 1e-9) + 1e-12) continue;
-      const auto it = grid_.find(key(ix, iy));
-      if (it == grid_.end()) continue;
-      for (int j : it->second) {
+      const std::vector<int>* members = cell(ix, iy);
+      if (!members) continue;
+      for (int j : *members) {
         if ((points_[j] - p).squaredNorm() <= d2) return true;
       }
     }

@@ -128,6 +128,30 @@ struct ScanMatcherOptions {
   std::string validate() const;  // empty when valid, else names the bad field
 };
 
+// The cells of a hash grid by key, numbered in the order they were added:
+// open addressing with linear probing in a power-of-two table kept at most
+// half full. Nearest-point queries look up nine cells each, and a flat
+// table does so without a node per cell or a division by a prime.
+class CellIndex {
+ public:
+  using Key = long long;
+  // The number of key's cell, or -1 when it has none.
+  int find(Key key) const;
+  // The number of key's cell; a new key gets the next number.
+  int findOrAdd(Key key);
+  void clear();
+  int size() const { return count_; }
+
+ private:
+  size_t slotOf(Key key) const;
+  void grow();
+
+  std::vector<Key> keys_;
+  std::vector<int> cells_;  // per slot: the cell's number, -1 where empty
+  int count_ = 0;
+  int shift_ = 64;  // 64 − log2(table size)
+};
+
 // A reference point set with normals and a hash grid for nearest neighbours.
 class PointCloudReference {
  public:
@@ -159,7 +183,10 @@ class PointCloudReference {
   std::vector<Vector2> points_;
   std::vector<Vector2> normals_;
   double cell_size_;
-  std::unordered_map<CellKey, std::vector<int>> grid_;
+  // The points of each cell, in index order, by the numbers of cell_index_.
+  const std::vector<int>* cell(int ix, int iy) const;
+  CellIndex cell_index_;
+  std::vector<std::vector<int>> cells_;
 };
 
 struct MatchResult {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <map>
 #include <random>
 
 #include "ekf_slam_core/sim/polygon_world.h"
@@ -100,6 +102,36 @@ TEST(PointCloudReference, IsolatedPointsGetNoNormalAndAreDropped) {
 // The grid search skips cells that cannot hold the answer; it must still
 // find the same distance as looking at every point, for gates of less and
 // more than a cell, near cell edges and far from every point.
+// The flat cell table numbers keys in the order they first came, finds
+// every one again through its growth, and finds no key it was not given;
+// neighbouring cells, negative indices and keys that differ only in one
+// half are the cases a hash of the key must spread.
+TEST(CellIndex, NumbersKeysInOrderAndFindsThemThroughGrowth) {
+  CellIndex index;
+  std::map<long long, int> reference;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> coordinate(-60, 60);
+  for (int k = 0; k < 5000; ++k) {
+    const long long key =
+        (static_cast<long long>(coordinate(rng)) << 32) ^ static_cast<uint32_t>(coordinate(rng));
+    const auto known = reference.find(key);
+    const int expected =
+        known == reference.end() ? static_cast<int>(reference.size()) : known->second;
+    ASSERT_EQ(index.findOrAdd(key), expected) << "key " << key;
+    reference.emplace(key, expected);
+  }
+  EXPECT_EQ(index.size(), static_cast<int>(reference.size()));
+  EXPECT_GT(reference.size(), 4000u);
+  for (const auto& [key, number] : reference) EXPECT_EQ(index.find(key), number);
+  for (int k = 0; k < 1000; ++k) {
+    const long long key = (static_cast<long long>(100 + k) << 32) | 5u;  // never added
+    EXPECT_EQ(index.find(key), -1);
+  }
+  index.clear();
+  EXPECT_EQ(index.find(reference.begin()->first), -1);
+  EXPECT_EQ(index.findOrAdd(7), 0);
+}
+
 TEST(PointCloudReference, NearestAndAnyWithinAgreeWithLookingAtEveryPoint) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
