@@ -55,6 +55,14 @@ def crop_to(ax, traj, margin=5.0):
     ax.set_ylim(traj[:, 2].min() - margin, traj[:, 2].max() + margin)
 
 
+def save(fig, out_dir, name):
+    """Writes fig as a PNG and closes it. Fixed margins in place of
+    tight_layout, and light PNG compression: a tenth of the figures' time."""
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.08, top=0.95, wspace=0.2)
+    fig.savefig(os.path.join(out_dir, name), dpi=100, pil_kwargs={"compress_level": 1})
+    plt.close(fig)
+
+
 def main(out_dir):
     smoothed = trajectory(out_dir, "smoothed")
     filtered = trajectory(out_dir, "filtered")
@@ -78,9 +86,7 @@ def main(out_dir):
     show_map(axes[1], out_dir, "map_odometry", "odometry only")
     axes[1].plot(odometry[:, 1], odometry[:, 2], color="tab:red", lw=0.6)
     crop_to(axes[1], odometry)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "fig_map_slam_vs_odometry.png"), dpi=100)
-    plt.close(fig)
+    save(fig, out_dir, "fig_map_slam_vs_odometry.png")
 
     rows = [line.split() for line in open(os.path.join(out_dir, "first_last_scans.txt"))
             if not line.startswith("#")]
@@ -95,18 +101,14 @@ def main(out_dir):
         ax.set_aspect("equal")
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "fig_first_last_scans.png"), dpi=100)
-    plt.close(fig)
+    save(fig, out_dir, "fig_first_last_scans.png")
 
     fig, axes = plt.subplots(1, 2, figsize=(14, 7))
     show_map(axes[0], out_dir, "map_filtered", "grid from the filtered poses")
     crop_to(axes[0], filtered)
     show_map(axes[1], out_dir, "map", "grid from the smoothed poses")
     crop_to(axes[1], smoothed)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "fig_smoothing.png"), dpi=100)
-    plt.close(fig)
+    save(fig, out_dir, "fig_smoothing.png")
     print("figures written to " + out_dir)
 
 
