@@ -248,14 +248,12 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
       }
       MatchResult match;
       odometry = scan_matcher_->processPoints(points, scan->stamp, raw_odometry, &match);
-      counters_.scan_match_unchecked = scan_matcher_->counters().unchecked_by_odometry;
       counters_.front_end = scan_matcher_->counters();
       if (local_matcher_) counters_.local_matcher = local_matcher_->counters();
       if (match.ok) {
         ++counters_.scan_matches;
       } else {
         ++counters_.scan_match_refusals;
-        counters_.scan_match_odometry_refusals = scan_matcher_->counters().refused_by_odometry;
       }
     } else {
       odometry = scan_matcher_->deadReckon(raw_odometry);

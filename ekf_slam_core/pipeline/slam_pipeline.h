@@ -234,9 +234,8 @@ struct PipelineCounters {
   long marginalised = 0;          // landmarks dropped by the max_landmarks bound
   long scan_matches = 0;          // scans aligned by the scan matcher
   long scan_match_refusals = 0;   // scans that fell back to the odometry increment
-  long scan_match_odometry_refusals = 0;  // of those: the match disagreed with the wheels
-  long scan_match_unchecked = 0;  // matches not checked against the wheels (stamp not increasing)
-  // Each scan matcher's own counts, refusals by reason: the front end's,
+  // Each scan matcher's own counts, refusals by reason and the matches not
+  // checked against the wheels (stamp not increasing): the front end's,
   // and the local matcher's that measures the full smoother's motion edges
   // (smoother.motion_edges: local_match) when it runs.
   ScanMatcherCounters front_end;

@@ -507,7 +507,7 @@ int main(int argc, char** argv) {
                  ? std::to_string(c.scan_matches) + " scans matched, " +
                        std::to_string(c.scan_match_refusals) +
                        " fell back to the odometry increment (" + refusalReasons(c.front_end) +
-                       "), " + std::to_string(c.scan_match_unchecked) +
+                       "), " + std::to_string(c.front_end.unchecked_by_odometry) +
                        " matches not checked against the wheels (stamp not after the "
                        "previous scan's)"
                  : std::string("off (raw odometry is the control)"))

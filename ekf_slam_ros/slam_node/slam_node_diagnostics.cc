@@ -45,7 +45,7 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("NIS 95% band", "no matches yet");
   }
   status.add("scan matches refused (disagree with the wheels)",
-             counters.scan_match_odometry_refusals);
+             counters.front_end.refused_by_odometry);
   status.add("scan matches refused (all reasons)", counters.scan_match_refusals);
   status.add("scan matches refused (correction beyond the bounds)",
              counters.front_end.refused_by_correction);
