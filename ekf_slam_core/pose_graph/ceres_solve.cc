@@ -1,9 +1,10 @@
 // PoseGraph::optimize and LandmarkGraph::optimize with Ceres (options
 // solver: ceres): Levenberg–Marquardt trust region over the cost functions
-// of ceres_costs.h, sparse Cholesky of the normal equations (SuiteSparse's
-// CHOLMOD), one thread. docs/solvers.md compares it with the hand-written
-// solver on the real logs' problems.
+// of ceres_costs.h, sparse Cholesky of the normal equations, one thread.
+// docs/solvers.md compares it with the hand-written solver on the real
+// logs' problems.
 #include <ceres/ceres.h>
+#include <ceres/version.h>
 
 #include <array>
 #include <vector>
@@ -15,13 +16,27 @@
 namespace ekf_slam {
 namespace {
 
+// The sparse Cholesky: CXSparse's simplicial factorisation where this Ceres
+// has it, else SuiteSparse's CHOLMOD. These problems are long chains of
+// poses with a few hundred landmarks; CHOLMOD's supernodal factorisation
+// with Debian's reference BLAS spends more per solve on them (the Intel
+// log's full smoother: 2.75-2.94 against 3.12-3.52 s, the same steps and
+// the same trajectory to the last digit written; docs/solvers.md). Ceres
+// 2.2 dropped CXSparse.
+ceres::SparseLinearAlgebraLibraryType sparseLibrary() {
+#if CERES_VERSION_MAJOR == 2 && CERES_VERSION_MINOR < 2
+  if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::CX_SPARSE)) return ceres::CX_SPARSE;
+#endif
+  return ceres::SUITE_SPARSE;
+}
+
 ceres::Solver::Options solverOptions(int max_iterations, double function_tolerance,
                                      double initial_lambda) {
   ceres::Solver::Options options;
   options.minimizer_type = ceres::TRUST_REGION;
   options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  options.sparse_linear_algebra_library_type = sparseLibrary();
   options.max_num_iterations = max_iterations;
   options.function_tolerance = function_tolerance;
   // The same first damping: Ceres's LM adds diag(JᵀJ) / radius.
