@@ -486,7 +486,10 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
     for (const Vector2& p : *keys_[m].points) submap.push_back(transformFrom(placement, p));
   }
   const std::vector<Vector2> query = queryPoints(key, false);
-  if (static_cast<int>(query.size()) < icp_.min_correspondences) return false;
+  if (static_cast<int>(query.size()) < icp_.min_correspondences) {
+    ++counters_.refused_by_score;  // nothing to score
+    return false;
+  }
   const std::vector<Vector2> sparse_query = queryPoints(key, true);
 
   // One grid's storage serves every verification; an outsized one (a
@@ -501,21 +504,31 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   grid.build(submap, options_.correlative);
   const CorrelativeResult coarse = correlativeSearch(sparse_query, grid, guess, radius, angle,
                                                      options_.correlative, options_.min_score);
-  if (coarse.score < options_.min_score) return false;
+  if (coarse.score < options_.min_score) {
+    ++counters_.refused_by_score;
+    return false;
+  }
 
   const PointCloudReference reference(submap, icp_.normal_radius,
                                       icp_.initial_correspondence_distance);
   const MatchResult fine = matchPoints(query, reference, coarse.pose, icp_);
   if (!fine.ok || fine.inlier_fraction < options_.min_inlier_fraction ||
       fine.rms_residual > options_.max_rms_residual) {
+    ++counters_.refused_by_fit;
     return false;
   }
   const Pose2 shift = between(coarse.pose, fine.pose);
-  if (std::hypot(shift.x, shift.y) > options_.max_icp_shift) return false;
+  if (std::hypot(shift.x, shift.y) > options_.max_icp_shift) {
+    ++counters_.refused_by_fit;
+    return false;
+  }
   // Along a featureless corridor the match slides: refuse it.
   const Matrix3 covariance = icpCovariance(query, reference, fine.pose, icp_);
   const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
-  if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) return false;
+  if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) {
+    ++counters_.refused_as_degenerate;
+    return false;
+  }
   // Where the query itself has structure along the weakest direction (a
   // wall across a corridor), the match must explain it there too, not only
   // on average: a view down one corridor matched onto a view along another
@@ -523,6 +536,7 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   // pass the test above.
   if (explainedStructure(query, reference, fine.pose, eigen.eigenvectors().col(1), icp_) <
       options_.min_directional_inlier_fraction) {
+    ++counters_.refused_as_degenerate;
     return false;
   }
   // Last, as the dearest: no other place of the window may match nearly as

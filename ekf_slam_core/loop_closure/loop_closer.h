@@ -225,15 +225,19 @@ struct LoopClosureOptions {
 
 struct LoopClosureCounters {
   long key_scans = 0;
-  long candidates = 0;     // verifications attempted
-  long accepted = 0;       // loop edges added
-  long refused = 0;        // failed verification (ambiguous ones included)
-  long ambiguous = 0;      // refused: another place of the window scored nearly as well
-  long dropped = 0;        // loop edges the kernel rejected at the end
-  long inconsistent = 0;   // loops refused by the consistency test (not in `accepted`)
-  long unconfirmed = 0;    // wide-window hypotheses no later key scan confirmed
-  long released = 0;       // key scans whose readings were let go (max_keyscans_per_place)
-  long heading_loops = 0;  // heading-only edges between the walls of one place
+  long candidates = 0;             // verifications attempted
+  long accepted = 0;               // loop edges added
+  long refused = 0;                // failed verification, for one of the reasons below
+  long refused_by_score = 0;       // the best correlative score under min_score
+  long refused_by_fit = 0;         // ICP failed, too few inliers, residual or shift too large
+  long refused_as_degenerate = 0;  // the match slides along a corridor, or leaves the
+                                   // query's structure across it unexplained
+  long ambiguous = 0;              // refused: another place of the window scored nearly as well
+  long dropped = 0;                // loop edges the kernel rejected at the end
+  long inconsistent = 0;           // loops refused by the consistency test (not in `accepted`)
+  long unconfirmed = 0;            // wide-window hypotheses no later key scan confirmed
+  long released = 0;               // key scans whose readings were let go (max_keyscans_per_place)
+  long heading_loops = 0;          // heading-only edges between the walls of one place
   long optimisations = 0;
   double optimisation_seconds = 0.0;
   double verification_seconds = 0.0;

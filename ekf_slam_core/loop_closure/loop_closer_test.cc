@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <random>
 
 #include "ekf_slam_core/sim/polygon_world.h"
@@ -283,13 +284,16 @@ struct LoopRun {
 // heading is 11 deg off and the position metres. `false_loops` wrong loops
 // are injected during the second lap, each claiming that the newest key
 // scan is where a key scan on the far side of the circle was.
-LoopRun runTwoLaps(bool enabled, int false_loops = 0) {
+// `tweak` (may be empty) changes the loop closer's options first.
+LoopRun runTwoLaps(bool enabled, int false_loops = 0,
+                   const std::function<void(LoopClosureOptions*)>& tweak = {}) {
   const sim::PolygonWorld world = hall();
   std::mt19937 rng(11);
   LoopRun run;
   run.truth = twoLaps();
   LoopClosureOptions options;
   options.enabled = enabled;
+  if (tweak) tweak(&options);
   LoopCloser closer(options, ScanMatcherOptions());
   Pose2 front_end = run.truth.front();
   for (size_t i = 0; i < run.truth.size(); ++i) {
@@ -452,6 +456,42 @@ TEST(LoopCloser, ClosesADriftedLoopAndPullsTheTrajectoryBack) {
     worst = std::max(worst, positionError(run.closed[i], run.truth[i]));
   }
   EXPECT_LT(worst, 0.4);
+}
+
+long refusalsByReason(const LoopClosureCounters& c) {
+  return c.refused_by_score + c.refused_by_fit + c.refused_as_degenerate + c.ambiguous;
+}
+
+// Every refused candidate is counted once with its reason: in the normal
+// run the reasons add up to the refusals, and a bound no match can meet
+// refuses every candidate with that bound's reason.
+TEST(LoopCloser, EveryRefusedCandidateIsCountedWithItsReason) {
+  const LoopRun normal = runTwoLaps(/*enabled=*/true);
+  EXPECT_GT(normal.counters.candidates, normal.counters.accepted);
+  EXPECT_EQ(normal.counters.refused, refusalsByReason(normal.counters));
+
+  // A mean likelihood of 1 needs every point exactly on the reference.
+  const LoopRun by_score =
+      runTwoLaps(/*enabled=*/true, 0, [](LoopClosureOptions* o) { o->min_score = 1.0; });
+  EXPECT_EQ(by_score.counters.accepted, 0);
+  EXPECT_GT(by_score.counters.refused, 0);
+  EXPECT_EQ(by_score.counters.refused_by_score, by_score.counters.refused);
+  EXPECT_EQ(by_score.counters.refused, by_score.counters.candidates);
+
+  // No match is pinned to a micrometre along its weakest direction.
+  const LoopRun degenerate = runTwoLaps(
+      /*enabled=*/true, 0, [](LoopClosureOptions* o) { o->max_degenerate_sigma = 1e-6; });
+  EXPECT_EQ(degenerate.counters.accepted, 0);
+  EXPECT_GT(degenerate.counters.refused_as_degenerate, 0);
+  EXPECT_EQ(degenerate.counters.refused, refusalsByReason(degenerate.counters));
+  EXPECT_EQ(degenerate.counters.refused, degenerate.counters.candidates);
+
+  // An ICP that may not move the correlative pose at all.
+  const LoopRun by_fit =
+      runTwoLaps(/*enabled=*/true, 0, [](LoopClosureOptions* o) { o->max_icp_shift = 1e-9; });
+  EXPECT_EQ(by_fit.counters.accepted, 0);
+  EXPECT_GT(by_fit.counters.refused_by_fit, 0);
+  EXPECT_EQ(by_fit.counters.refused, refusalsByReason(by_fit.counters));
 }
 
 // The causal estimate (what a live node publishes at each scan) is the front

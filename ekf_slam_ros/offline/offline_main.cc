@@ -238,9 +238,11 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   line.precision(3);
   line << c.key_scans << " key scans (" << c.released
        << " without readings: their place was full), " << c.candidates << " candidates verified ("
-       << c.ambiguous << " refused as ambiguous), " << c.accepted << " loops accepted ("
-       << c.dropped << " dropped by the kernel at the end, " << c.inconsistent
-       << " refused as inconsistent with the graph, " << c.unconfirmed
+       << c.refused << " refused: " << c.refused_by_score << " scored under min_score, "
+       << c.refused_by_fit << " failed the fine match, " << c.refused_as_degenerate
+       << " sliding along a corridor, " << c.ambiguous << " ambiguous), " << c.accepted
+       << " loops accepted (" << c.dropped << " dropped by the kernel at the end, "
+       << c.inconsistent << " refused as inconsistent with the graph, " << c.unconfirmed
        << " wide-window matches never confirmed), " << c.heading_loops
        << " heading loops between the walls of one place, " << c.optimisations
        << " optimisations; verification " << c.verification_seconds << " s, optimisation "

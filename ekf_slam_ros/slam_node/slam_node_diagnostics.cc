@@ -70,6 +70,9 @@ void SlamNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("key scans without readings (place full)", loops.released);
     status.add("loops accepted", loops.accepted);
     status.add("loop candidates refused", loops.refused);
+    status.add("loop candidates refused (score under min_score)", loops.refused_by_score);
+    status.add("loop candidates refused (fine match failed)", loops.refused_by_fit);
+    status.add("loop candidates refused (sliding along a corridor)", loops.refused_as_degenerate);
     status.add("loop candidates refused as ambiguous", loops.ambiguous);
     status.add("loops refused as inconsistent", loops.inconsistent);
     status.add("wide-window matches never confirmed", loops.unconfirmed);
