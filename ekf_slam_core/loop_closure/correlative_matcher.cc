@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace ekf_slam {
 
@@ -40,10 +41,15 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
   // one allocates nothing.
   if (levels_.size() < static_cast<size_t>(options.levels)) levels_.resize(options.levels);
   level_count_ = 1;
-  std::vector<float>& fine = levels_[0];
-  fine.assign(cells_total, 0.0f);
+  // Each cell's value is exp(−d²/2σ²) for its nearest point: exp falls as
+  // d² grows, so the nearest point's squared distance is found first and
+  // exp taken once per cell, not once per point and cell (the same floats:
+  // the maximum of the values is the value of the minimum).
   const int cells = static_cast<int>(std::ceil(reach / resolution_));
   const double inv_two_sigma2 = 1.0 / (2.0 * options.sigma * options.sigma);
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  std::vector<double>& nearest_d2 = scratch_;
+  nearest_d2.assign(cells_total, kNone);
   for (const Vector2& p : points) {
     int cx, cy;
     cellOf(p, &cx, &cy);
@@ -51,11 +57,16 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
       for (int ix = cx - cells; ix <= cx + cells; ++ix) {
         if (!inside(ix, iy)) continue;
         const Vector2 centre = origin_ + resolution_ * Vector2(ix + 0.5, iy + 0.5);
-        const float value =
-            static_cast<float>(std::exp(-(centre - p).squaredNorm() * inv_two_sigma2));
-        float& cell = fine[index(ix, iy)];
-        cell = std::max(cell, value);
+        double& d2 = nearest_d2[index(ix, iy)];
+        d2 = std::min(d2, (centre - p).squaredNorm());
       }
+    }
+  }
+  std::vector<float>& fine = levels_[0];
+  fine.assign(cells_total, 0.0f);
+  for (size_t i = 0; i < cells_total; ++i) {
+    if (nearest_d2[i] != kNone) {
+      fine[i] = static_cast<float>(std::exp(-nearest_d2[i] * inv_two_sigma2));
     }
   }
   // Level k from level k-1: the maximum over [i, i + 2^k) is the larger of
@@ -67,20 +78,23 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
     const int h = 1 << (k - 1);
     const int pad = pad_.back() + h;
     const int w = width_ + pad, ht = height_ + pad;
-    along_x_.assign(static_cast<size_t>(w) * ht, 0.0f);
+    std::vector<double>& along_x = scratch_;
+    along_x.assign(static_cast<size_t>(w) * ht, 0.0);
     for (int y = 0; y < ht; ++y) {
       for (int x = 0; x < w; ++x) {
-        along_x_[static_cast<size_t>(y) * w + x] =
+        along_x[static_cast<size_t>(y) * w + x] =
             std::max(value(k - 1, x - pad, y - pad), value(k - 1, x - pad + h, y - pad));
       }
     }
     std::vector<float>& level = levels_[k];
-    level.assign(along_x_.size(), 0.0f);
+    level.assign(along_x.size(), 0.0f);
     for (int y = 0; y < ht; ++y) {
       for (int x = 0; x < w; ++x) {
-        const float a = along_x_[static_cast<size_t>(y) * w + x];
+        const float a = static_cast<float>(along_x[static_cast<size_t>(y) * w + x]);
         level[static_cast<size_t>(y) * w + x] =
-            y + h < ht ? std::max(a, along_x_[static_cast<size_t>(y + h) * w + x]) : a;
+            y + h < ht
+                ? std::max(a, static_cast<float>(along_x[static_cast<size_t>(y + h) * w + x]))
+                : a;
       }
     }
     pad_.push_back(pad);
@@ -89,7 +103,7 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
 }
 
 size_t LikelihoodGrid::storageBytes() const {
-  size_t bytes = along_x_.capacity() * sizeof(float);
+  size_t bytes = scratch_.capacity() * sizeof(double);
   for (const std::vector<float>& level : levels_) bytes += level.capacity() * sizeof(float);
   return bytes;
 }

@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include "ekf_slam_core/sim/polygon_world.h"
@@ -130,6 +132,43 @@ TEST(LikelihoodGrid, RebuiltInPlaceEqualsAFreshGrid) {
   EXPECT_TRUE(reused.empty());
   EXPECT_EQ(reused.storageBytes(), 0u);
   expectSame(corner);
+}
+
+// The fine level is the definition: at each cell centre, exp(−d²/2σ²) for
+// the nearest point d within 3σ's reach of whole cells, else 0, checked
+// against a look at every point (float of the same double).
+TEST(LikelihoodGrid, FineLevelIsTheLikelihoodOfTheNearestPoint) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(3);
+  const std::vector<Vector2> points = placedSweep(world, Pose2(1.0, -0.5, 2.0), &rng);
+  CorrelativeMatcherOptions options;
+  const LikelihoodGrid grid(points, options);
+  ASSERT_FALSE(grid.empty());
+  const int cells = static_cast<int>(std::ceil(3.0 * options.sigma / options.resolution));
+  int ix_end, iy_end;
+  grid.cellOf(grid.upperCorner(), &ix_end, &iy_end);
+  long checked = 0, positive = 0;
+  for (int iy = 0; iy < iy_end; iy += 3) {
+    for (int ix = 0; ix < ix_end; ix += 3) {
+      const Vector2 centre = grid.lowerCorner() + options.resolution * Vector2(ix + 0.5, iy + 0.5);
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Vector2& p : points) {
+        int px, py;
+        grid.cellOf(p, &px, &py);
+        if (std::abs(px - ix) > cells || std::abs(py - iy) > cells) continue;
+        nearest = std::min(nearest, (centre - p).squaredNorm());
+      }
+      const float expected =
+          std::isinf(nearest)
+              ? 0.0f
+              : static_cast<float>(std::exp(-nearest / (2.0 * options.sigma * options.sigma)));
+      EXPECT_NEAR(grid.fine(ix, iy), expected, 1e-6f) << "cell " << ix << " " << iy;
+      ++checked;
+      positive += expected > 0.0f;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(positive, 100);
 }
 
 // A window of ±60 m and any heading around a guess 25 m and 150 deg off:
