@@ -361,6 +361,13 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     recorder_.addTransition(filter_.lastMotionJacobian(), filter_.pose(), filter_.poseCovariance());
   }
   const Pose2 local_motion = between(last_local_pose_, local_pose_);
+  // The wheels' own step, for the full smoother's wheel edges: only where
+  // the control is not the wheels already, and never across a jump.
+  const Pose2 wheels = between(last_raw_odometry_, current_raw_odometry_);
+  const bool wheels_usable =
+      scan_matcher_ != nullptr && predict &&
+      std::hypot(wheels.x, wheels.y) <= options_.filter.max_step_translation &&
+      std::abs(wheels.theta) <= options_.filter.max_step_rotation;
   last_odometry_ = odometry;
   last_local_pose_ = local_pose_;
   last_raw_odometry_ = current_raw_odometry_;
@@ -407,7 +414,8 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   if (options_.landmarks == LandmarkSet::kPointsAndMecp) updateMecp(*out);
   recorder_.addFiltered(stamp, filter_.pose(), filter_.poseCovariance());
   full_recorder_.addIteration(stamp, filter_, predict ? &control : nullptr, out->observations,
-                              out->iteration, local_matcher_ ? &local_motion : nullptr);
+                              out->iteration, local_matcher_ ? &local_motion : nullptr,
+                              wheels_usable ? &wheels : nullptr);
 
   ++counters_.iterations;
   if (out->iteration.update_status != FilterStatus::kOk) ++counters_.update_failures;

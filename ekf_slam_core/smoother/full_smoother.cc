@@ -20,6 +20,22 @@ namespace {
 constexpr double kMotionFloorTranslation = 1e-8;  // m²
 constexpr double kMotionFloorRotation = 1e-10;    // rad²
 
+// A step's length for the wheels' random walk.
+double wheelStepLength(const Pose2& step) {
+  return std::max(std::hypot(step.x, step.y), kWheelMinStep);
+}
+
+// The wheels' increment of a step disagrees with the motion edge's
+// measurement: the step has something to learn and a second edge to add.
+// Where the match fell back to the wheels the two differ by rounding only
+// (the increment went through the matcher's pose and back).
+bool hasWheelEdge(const SmootherIteration& it) {
+  constexpr double kSame = 1e-9;  // m, rad
+  if (!it.has_control || !it.has_wheels) return false;
+  const Pose2 r = between(it.wheels, it.motion);
+  return std::abs(r.x) > kSame || std::abs(r.y) > kSame || std::abs(r.theta) > kSame;
+}
+
 bool isPositiveDefinite(const Matrix3& m) {
   const Eigen::LLT<Matrix3> llt(m);
   return m.allFinite() && llt.info() == Eigen::Success &&
@@ -38,7 +54,8 @@ void FullSmootherRecorder::setPrior(const Pose2& mean, const Matrix3& covariance
 void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
                                         const OdometryControl* control,
                                         const std::vector<PointObservation>& observations,
-                                        const IterationReport& report, const Pose2* local_motion) {
+                                        const IterationReport& report, const Pose2* local_motion,
+                                        const Pose2* wheels) {
   SmootherIteration it;
   it.stamp = stamp;
   it.filtered = filter.pose();
@@ -47,6 +64,10 @@ void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
     it.control = *control;
     it.control_covariance = controlCovariance(*control, filter.options().motion_noise);
     it.motion = local_motion != nullptr ? *local_motion : applyControl(Pose2(), *control);
+    if (wheels != nullptr) {
+      it.has_wheels = true;
+      it.wheels = *wheels;
+    }
   }
   // The update refuses as a whole, and then report.matches is empty: only
   // what the filter really used enters.
@@ -105,6 +126,29 @@ int FullSmootherRecorder::survivorOf(int id) const {
     id = it->second;
   }
   return id;
+}
+
+WheelNoise learnWheelNoise(const std::vector<SmootherIteration>& iterations) {
+  WheelNoise out;
+  std::vector<double> per_metre[3];
+  for (const SmootherIteration& it : iterations) {
+    if (!hasWheelEdge(it)) continue;
+    const Pose2 r = between(it.wheels, it.motion);
+    const double d = wheelStepLength(it.wheels);
+    per_metre[0].push_back(r.x * r.x / d);
+    per_metre[1].push_back(r.y * r.y / d);
+    per_metre[2].push_back(wrapAngle(r.theta) * wrapAngle(r.theta) / d);
+  }
+  out.samples = static_cast<int>(per_metre[0].size());
+  if (out.samples < kWheelMinSamples) return out;
+  // The median of χ²₁ (a squared standard normal).
+  constexpr double kMedianChiSquare1 = 0.454936;
+  for (int i = 0; i < 3; ++i) {
+    std::vector<double>& q = per_metre[i];
+    std::nth_element(q.begin(), q.begin() + q.size() / 2, q.end());
+    out.sigma_per_sqrt_metre[i] = std::sqrt(q[q.size() / 2] / kMedianChiSquare1);
+  }
+  return out;
 }
 
 Matrix3 motionEdgeCovariance(const OdometryControl& u, const Matrix3& control_covariance) {
@@ -350,6 +394,10 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
     }
   }
 
+  const WheelNoise wheels = options.wheel_edges ? learnWheelNoise(iterations) : WheelNoise();
+  const bool wheel_edges = options.wheel_edges && wheels.samples >= kWheelMinSamples;
+  result.wheels = wheels;
+
   auto build = [&](Problem* problem) {
     LandmarkGraph& graph = problem->graph;
     for (int k = 0; k < n; ++k) {
@@ -363,6 +411,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
       prior.information = record.priorCovariance().inverse();
       graph.addEdge(prior);
     }
+    result.wheels.edges = 0;
     for (int k = 1; k < n; ++k) {
       const SmootherIteration& it = iterations[k];
       if (!it.has_control) continue;
@@ -372,6 +421,19 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
       motion.measurement = it.motion;
       motion.information = motionEdgeCovariance(it.control, it.control_covariance).inverse();
       graph.addEdge(motion);
+      if (wheel_edges && hasWheelEdge(it)) {
+        RelativePoseEdge wheel;
+        wheel.from = k - 1;
+        wheel.to = k;
+        wheel.measurement = it.wheels;
+        const Vector3 variance =
+            wheels.sigma_per_sqrt_metre.cwiseAbs2() * wheelStepLength(it.wheels) +
+            Vector3(kMotionFloorTranslation, kMotionFloorTranslation, kMotionFloorRotation);
+        wheel.information = variance.cwiseInverse().asDiagonal();
+        wheel.kernel = options.wheel_kernel;
+        graph.addEdge(wheel);
+        ++result.wheels.edges;
+      }
     }
     problem->edges_of_track.assign(tracks.size(), {});
     int edge_index = 0;

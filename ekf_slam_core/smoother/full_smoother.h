@@ -14,6 +14,8 @@
 //   landmarks keep theirs);
 // - motion edges: each iteration's control u_k with the filter's Q(u_k),
 //   carried into the pose space by G (Σ_k = A G₀ Q G₀ᵀ Aᵀ, see the maths note);
+// - wheel edges (a scan-matched control): each step's wheel increment, with
+//   the wheels' noise learned from the run (FullSmootherOptions::wheel_edges);
 // - observation edges: each observation the filter matched or made a
 //   landmark from, with the feature's range–bearing covariance, through the
 //   laser mount; optionally with a robust kernel;
@@ -59,6 +61,23 @@ struct FullSmootherOptions {
   // apart: 4 hold about the last 0.6 m). 4 and 8 give the logs' final
   // errors within 1.4 mm of each other; 4 costs less.
   int local_match_key_scans = 4;
+  // Wheel edges. When the control is a scan match, the wheels measured
+  // each step too, independently of the laser, and a building where the
+  // laser sees little (outdoors, long corridors) is where the match drifts
+  // and the wheels may not (the hospital log: scan-matched heading 12.5°
+  // off across visits minutes apart, the wheels 1.6°). Each step then gets
+  // a second motion edge, the wheels' increment. How far to trust the
+  // wheels is learned from the run itself, not assumed: their
+  // disagreement with the motion edges' measurement, per metre driven,
+  // gives each axis's variance (robustly: the median of r²/d over the
+  // steps, divided by the median of χ²₁, 0.455). That spread holds the
+  // matcher's noise too, so the wheels are never weighted above what the
+  // data show of them. Wheels that slip or a bump are heavy-tailed
+  // errors: a Cauchy kernel (kernel_width) takes those out. Steps where
+  // the motion edge is the wheels' increment already (the match fell back
+  // to them) get no second edge.
+  bool wheel_edges = true;
+  RobustKernel wheel_kernel = RobustKernel::kCauchy;
   // Kernel on observation edges: a wrong association (a corner matched to
   // its neighbour) is down-weighted instead of bending the trajectory.
   // Cauchy beat Huber and no kernel on every simulated bag (docs/offline.md).
@@ -120,6 +139,8 @@ struct FullSmootherOptions {
     v.choice("motion_edges", motion_edges,
              {{SmootherMotion::kControl, "control"}, {SmootherMotion::kLocalMatch, "local_match"}});
     v.integer("local_match_key_scans", local_match_key_scans, Bounds::closed(1, 1000, "scans"));
+    v.flag("wheel_edges", wheel_edges);
+    v.choice("wheel_kernel", wheel_kernel, kernels);
     v.choice("observation_kernel", observation_kernel, kernels);
     v.choice("loop_kernel", loop_kernel, kernels);
     optimizer.visitFields(v);
@@ -155,6 +176,10 @@ struct SmootherIteration {
   // shape is not bent by the global map's mistakes), else u_k itself.
   // Its covariance is u_k's.
   Pose2 motion;
+  // The wheels' own increment over the same step, when the control is
+  // not the wheels (a scan match) and the step is no odometry jump.
+  bool has_wheels = false;
+  Pose2 wheels;
   std::vector<LandmarkSighting> sightings;
 };
 
@@ -176,10 +201,12 @@ class FullSmootherRecorder {
   void setPrior(const Pose2& mean, const Matrix3& covariance);
   // `control` is null on the initialising iteration (no prediction).
   // `local_motion`, when not null, is the motion edge's measurement
-  // (SmootherIteration::motion); else the control is.
+  // (SmootherIteration::motion); else the control is. `wheels`, when not
+  // null, is the wheels' increment over the step (SmootherIteration::wheels).
   void addIteration(double stamp, const EkfSlam& filter, const OdometryControl* control,
                     const std::vector<PointObservation>& observations,
-                    const IterationReport& report, const Pose2* local_motion = nullptr);
+                    const IterationReport& report, const Pose2* local_motion = nullptr,
+                    const Pose2* wheels = nullptr);
 
   // Forgets the oldest `count` iterations (a bounded history), and the
   // merges and landmark estimates only they referred to. The caller gives
@@ -203,6 +230,24 @@ class FullSmootherRecorder {
   Matrix3 prior_covariance_ = Matrix3::Zero();
 };
 
+// The wheels' noise as a run shows it (FullSmootherOptions::wheel_edges):
+// a random walk, variance per metre driven on each axis of the step (x
+// forward, y left, heading).
+struct WheelNoise {
+  int samples = 0;                                 // steps it was learned from
+  Vector3 sigma_per_sqrt_metre = Vector3::Zero();  // m/√m, m/√m, rad/√m
+  int edges = 0;                                   // wheel edges added
+};
+
+// Learns WheelNoise from the recorded steps that have both a motion edge
+// and the wheels' increment, and where the two differ. A step counts at
+// least kWheelMinStep of travel (a turn on the spot). Fewer than
+// kWheelMinSamples such steps: samples is that count and sigma zero (too
+// little to learn from; no wheel edges).
+constexpr double kWheelMinStep = 0.01;  // m
+constexpr int kWheelMinSamples = 30;
+WheelNoise learnWheelNoise(const std::vector<SmootherIteration>& iterations);
+
 struct FullSmootherResult {
   std::vector<Pose2> poses;                    // one per recorded iteration
   std::unordered_map<int, Vector2> landmarks;  // by surviving id (re-associated: by new id)
@@ -212,6 +257,7 @@ struct FullSmootherResult {
   bool reassociated = false;     // the sightings were associated afresh (landmark ids are new)
   int ambiguous_sightings = 0;   // left out by the re-association
   LandmarkGraphSummary summary;  // iterations summed over the verification rounds
+  WheelNoise wheels;             // learned for the wheel edges (edges = 0: none added)
 };
 
 // `filter` gives the laser mount and the final landmark estimates, the

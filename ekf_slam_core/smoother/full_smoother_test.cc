@@ -256,5 +256,138 @@ TEST(FullSmoother, DroppingTheOldestIterationsKeepsTheMergesTheRestNeeds) {
   EXPECT_EQ(record.survivorOf(9), 9);
 }
 
+// Wheel edges. A chain without landmarks driven straight in 0.2 m steps:
+// the motion edges (a scan matcher's moves, the filter's control) and the
+// wheels each measure every step with their own errors.
+struct WheelChain {
+  std::vector<double> matcher_heading_bias;  // rad per step, added to each step's turn
+  double matcher_sigma = 0.0003;             // rad and m per step
+  double wheel_sigma = 0.0005;               // rad and m per step
+  int slip_step = -1;                        // the wheels report this step 0.3 m too long
+};
+
+struct WheelChainResult {
+  Pose2 truth_end, smoothed_end;
+  FullSmootherResult details;
+};
+
+WheelChainResult runWheelChain(const WheelChain& chain, const FullSmootherOptions& smoother) {
+  const int steps = static_cast<int>(chain.matcher_heading_bias.size());
+  constexpr double kStep = 0.2;  // m
+  FilterOptions options;
+  options.motion_noise = MotionNoiseOptions();
+  options.motion_noise.rot_per_rot = 0.0;
+  options.motion_noise.rot_per_trans = 0.0;
+  options.motion_noise.trans_per_trans = 0.0;
+  options.motion_noise.trans_per_rot = 0.0;
+  options.motion_noise.min_rot_sigma = 0.002;  // as a scan match's (config/ekf_slam.yaml)
+  options.motion_noise.min_trans_sigma = 0.005;
+  EkfSlam filter(options);
+  FullSmootherRecorder record;
+  record.addIteration(0.0, filter, nullptr, {}, IterationReport());
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Pose2 truth, matched;
+  for (int k = 0; k < steps; ++k) {
+    const Pose2 step(kStep, 0.0, 0.0);
+    truth = compose(truth, step);
+    const Pose2 motion(kStep + chain.matcher_sigma * normal(rng), chain.matcher_sigma * normal(rng),
+                       chain.matcher_heading_bias[k] + chain.matcher_sigma * normal(rng));
+    Pose2 wheels(kStep + chain.wheel_sigma * normal(rng), chain.wheel_sigma * normal(rng),
+                 chain.wheel_sigma * normal(rng));
+    if (k == chain.slip_step) wheels.x += 0.3;
+    const Pose2 next = compose(matched, motion);
+    const OdometryControl u = controlFromOdometry(matched, next);
+    matched = next;
+    EXPECT_EQ(filter.predict(u, 0.1), FilterStatus::kOk);
+    record.addIteration(0.1 * (k + 1), filter, &u, {}, IterationReport(), &motion, &wheels);
+  }
+  WheelChainResult out;
+  out.details = smoothFull(record, filter, {}, smoother);
+  out.truth_end = truth;
+  out.smoothed_end = out.details.poses.back();
+  return out;
+}
+
+TEST(FullSmoother, LearnsTheWheelsNoiseFromTheirDisagreementWithTheMotionEdges) {
+  // Steps of 0.1 m; the wheels' per-metre noise is what is learned, the
+  // matcher's is ten times smaller.
+  const Vector3 truth(0.02, 0.01, 0.005);  // m/√m, m/√m, rad/√m
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<SmootherIteration> iterations(4000);
+  for (SmootherIteration& it : iterations) {
+    it.has_control = true;
+    it.motion = Pose2(0.1 + 0.0002 * normal(rng), 0.0001 * normal(rng), 0.00005 * normal(rng));
+    it.has_wheels = true;
+    const Vector3 sigma = truth * std::sqrt(0.1);
+    it.wheels =
+        Pose2(0.1 + sigma.x() * normal(rng), sigma.y() * normal(rng), sigma.z() * normal(rng));
+  }
+  // Steps where the motion edge is the wheels' increment (the match fell
+  // back to them) teach nothing.
+  for (int k = 0; k < 1000; ++k) iterations[k].motion = iterations[k].wheels;
+  const WheelNoise learned = learnWheelNoise(iterations);
+  EXPECT_EQ(learned.samples, 3000);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(learned.sigma_per_sqrt_metre[i], truth[i], 0.1 * truth[i]) << "axis " << i;
+  }
+  // Too few steps to learn from: nothing learned.
+  iterations.resize(1000 + kWheelMinSamples - 1);
+  const WheelNoise too_few = learnWheelNoise(iterations);
+  EXPECT_EQ(too_few.samples, kWheelMinSamples - 1);
+  EXPECT_EQ(too_few.sigma_per_sqrt_metre, Vector3::Zero());
+}
+
+TEST(FullSmoother, WheelEdgesHoldTheHeadingWhereTheMatcherDrifts) {
+  // 300 steps (60 m); over the last 100 the matcher turns 1.5 mrad per step
+  // that the robot never turned (outdoors, little to match), 0.15 rad in
+  // all. The wheels are learned from the 200 good steps (the median), so
+  // in the drifting stretch they hold the heading.
+  WheelChain chain;
+  chain.matcher_heading_bias.assign(300, 0.0);
+  std::fill(chain.matcher_heading_bias.begin() + 200, chain.matcher_heading_bias.end(), 0.0015);
+  FullSmootherOptions without;
+  without.wheel_edges = false;
+  const WheelChainResult plain = runWheelChain(chain, without);
+  const WheelChainResult wheels = runWheelChain(chain, FullSmootherOptions());
+  const double plain_error = std::abs(wrapAngle(plain.smoothed_end.theta - plain.truth_end.theta));
+  const double wheel_error =
+      std::abs(wrapAngle(wheels.smoothed_end.theta - wheels.truth_end.theta));
+  std::cout << "end heading error: motion edges alone " << plain_error << " rad, with wheel edges "
+            << wheel_error << " rad (" << wheels.details.wheels.edges << " wheel edges, learned "
+            << wheels.details.wheels.sigma_per_sqrt_metre.transpose() << " per sqrt(m))\n";
+  EXPECT_EQ(plain.details.wheels.edges, 0);
+  EXPECT_EQ(wheels.details.wheels.edges, 300);
+  EXPECT_GT(plain_error, 0.12);
+  EXPECT_LT(wheel_error, 0.3 * plain_error);
+  EXPECT_LT((wheels.smoothed_end.translation() - wheels.truth_end.translation()).norm(),
+            0.3 * (plain.smoothed_end.translation() - plain.truth_end.translation()).norm());
+}
+
+TEST(FullSmoother, AWheelSlipDoesNotBendTheTrajectory) {
+  // The wheels report one step 0.3 m too long (a slip, a bump). Under the
+  // Cauchy kernel the slipped run ends within a thirtieth of the slip of
+  // where the run without it does (the kernel's influence falls as 1/r,
+  // it does not vanish); without a kernel the wheels, trusted as the other
+  // steps taught, carry nearly all of the slip into the trajectory.
+  WheelChain chain;
+  chain.matcher_heading_bias.assign(200, 0.0);
+  const WheelChainResult clean = runWheelChain(chain, FullSmootherOptions());
+  chain.slip_step = 100;
+  const WheelChainResult slipped = runWheelChain(chain, FullSmootherOptions());
+  FullSmootherOptions no_kernel;
+  no_kernel.wheel_kernel = RobustKernel::kNone;
+  const WheelChainResult bent = runWheelChain(chain, no_kernel);
+  const double robust_shift =
+      (slipped.smoothed_end.translation() - clean.smoothed_end.translation()).norm();
+  const double plain_shift =
+      (bent.smoothed_end.translation() - clean.smoothed_end.translation()).norm();
+  std::cout << "a 0.3 m slip moves the end by " << robust_shift << " m (Cauchy), " << plain_shift
+            << " m (no kernel)\n";
+  EXPECT_LT(robust_shift, 0.01);
+  EXPECT_GT(plain_shift, 0.2);
+}
+
 }  // namespace
 }  // namespace ekf_slam

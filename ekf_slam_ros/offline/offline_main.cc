@@ -250,6 +250,21 @@ std::string loopClosureLine(const ekf_slam::LoopCloser* closer) {
   return line.str();
 }
 
+// The full smoother's wheel edges and the wheel noise they were weighted by.
+std::string wheelEdgesLine(const ekf_slam::WheelNoise& wheels) {
+  std::ostringstream line;
+  if (wheels.edges == 0) {
+    line << "none (" << wheels.samples << " steps where the wheels and the motion edges differ)";
+    return line.str();
+  }
+  line.precision(4);
+  line << wheels.edges << ", the wheels' noise learned from " << wheels.samples
+       << " steps: " << wheels.sigma_per_sqrt_metre.x() << " m forward, "
+       << wheels.sigma_per_sqrt_metre.y() << " m sideways, "
+       << ekf_slam::radToDeg(wheels.sigma_per_sqrt_metre.z()) << " deg per sqrt(m)";
+  return line.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -574,6 +589,7 @@ int main(int argc, char** argv) {
          << " iterations (" << (smoother.summary.converged ? "converged" : "not converged")
          << "), cost " << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost
          << ", " << smoothing_seconds << " s\n"
+         << "wheel edges: " << wheelEdgesLine(smoother.wheels) << "\n"
          << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
          << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
