@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 namespace ekf_slam {
 namespace {
@@ -25,15 +26,18 @@ double wheelStepLength(const Pose2& step) {
   return std::max(std::hypot(step.x, step.y), kWheelMinStep);
 }
 
-// The wheels' increment of a step disagrees with the motion edge's
-// measurement: the step has something to learn and a second edge to add.
-// Where the match fell back to the wheels the two differ by rounding only
-// (the increment went through the matcher's pose and back).
-bool hasWheelEdge(const SmootherIteration& it) {
+// The wheels' disagreement with the motion edge's measurement over a step,
+// when there is one: then the step has something to learn and a second
+// edge to add. Where the match fell back to the wheels the two differ by
+// rounding only (the increment went through the matcher's pose and back).
+std::optional<Pose2> wheelDisagreement(const SmootherIteration& it) {
   constexpr double kSame = 1e-9;  // m, rad
-  if (!it.has_control || !it.has_wheels) return false;
+  if (!it.has_control || !it.has_wheels) return std::nullopt;
   const Pose2 r = between(it.wheels, it.motion);
-  return std::abs(r.x) > kSame || std::abs(r.y) > kSame || std::abs(r.theta) > kSame;
+  if (std::abs(r.x) <= kSame && std::abs(r.y) <= kSame && std::abs(r.theta) <= kSame) {
+    return std::nullopt;
+  }
+  return r;
 }
 
 bool isPositiveDefinite(const Matrix3& m) {
@@ -132,12 +136,12 @@ WheelNoise learnWheelNoise(const std::vector<SmootherIteration>& iterations) {
   WheelNoise out;
   std::vector<double> per_metre[3];
   for (const SmootherIteration& it : iterations) {
-    if (!hasWheelEdge(it)) continue;
-    const Pose2 r = between(it.wheels, it.motion);
+    const std::optional<Pose2> r = wheelDisagreement(it);
+    if (!r) continue;
     const double d = wheelStepLength(it.wheels);
-    per_metre[0].push_back(r.x * r.x / d);
-    per_metre[1].push_back(r.y * r.y / d);
-    per_metre[2].push_back(wrapAngle(r.theta) * wrapAngle(r.theta) / d);
+    per_metre[0].push_back(r->x * r->x / d);
+    per_metre[1].push_back(r->y * r->y / d);
+    per_metre[2].push_back(r->theta * r->theta / d);
   }
   out.samples = static_cast<int>(per_metre[0].size());
   if (out.samples < kWheelMinSamples) return out;
@@ -421,7 +425,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
       motion.measurement = it.motion;
       motion.information = motionEdgeCovariance(it.control, it.control_covariance).inverse();
       graph.addEdge(motion);
-      if (wheel_edges && hasWheelEdge(it)) {
+      if (wheel_edges && wheelDisagreement(it)) {
         RelativePoseEdge wheel;
         wheel.from = k - 1;
         wheel.to = k;
