@@ -478,11 +478,19 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
   };
 
   std::unique_ptr<Problem> problem;
+  // Solves that a verification follows stop at the looser tolerance; the
+  // last one (the verification rounds spent, or nothing detached) runs to
+  // the optimizer's own, from where the previous solve stopped.
+  bool last_solve =
+      options.verification_relative_decrease <= options.optimizer.min_relative_decrease;
   for (int round = 0;; ++round) {
     problem = std::make_unique<Problem>(filter.options().laser_pose);
     build(problem.get());
     if (last_problem) *last_problem = problem->graph;
-    const LandmarkGraphSummary summary = problem->graph.optimize(options.optimizer);
+    last_solve = last_solve || round >= options.max_verification_rounds;
+    LandmarkGraphOptions solve_options = options.optimizer;
+    if (!last_solve) solve_options.min_relative_decrease = options.verification_relative_decrease;
+    const LandmarkGraphSummary summary = problem->graph.optimize(solve_options);
     if (round == 0) result.summary.initial_cost = summary.initial_cost;
     result.summary.iterations += summary.iterations;
     result.summary.final_cost = summary.final_cost;
@@ -529,7 +537,10 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
       groups[g] = kept;
     }
     result.detached_visits += detached;
-    if (detached == 0) break;
+    if (detached == 0) {
+      if (last_solve) break;
+      last_solve = true;  // the same problem once more, to the full tolerance
+    }
   }
 
   result.poses = problem->graph.poses();

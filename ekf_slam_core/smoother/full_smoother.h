@@ -111,6 +111,15 @@ struct FullSmootherOptions {
   int revisit_gap = 50;                     // iterations
   double revisit_gate_probability = 0.999;  // χ² quantile
   int max_verification_rounds = 2;          // 0: take every association as given
+  // A solve followed by a verification needs each visit's χ², not the last
+  // digits of the optimum: it ends once a step lowers the cost by less than
+  // this fraction. The solve whose result is returned then runs on from
+  // there to the optimizer's own min_relative_decrease (after a round that
+  // detached nothing, a last solve of the same problem does that). The long
+  // tail of small steps, which the robust kernels make slow, is thus paid
+  // once instead of in every round (docs/offline.md, "Solve tolerances").
+  // At or below min_relative_decrease every solve runs to it.
+  double verification_relative_decrease = 1e-3;
 
   // Re-association against the initial poses. When smoothFull() is given
   // initial poses (the loop-closed back end's), the filter's associations
@@ -147,6 +156,8 @@ struct FullSmootherOptions {
     v.integer("revisit_gap", revisit_gap, Bounds::closed(1, 1e8, "iterations"));
     v.number("revisit_gate_probability", revisit_gate_probability, Bounds::open(0.0, 1.0));
     v.integer("max_verification_rounds", max_verification_rounds, Bounds::closed(0, 100));
+    v.number("verification_relative_decrease", verification_relative_decrease,
+             Bounds::closed(0.0, 1.0));
     v.flag("reassociate", reassociate);
     v.number("reassociation_position_sigma", reassociation_position_sigma,
              Bounds::closed(0.0, 100.0, "m"));
