@@ -84,8 +84,9 @@ struct FullSmootherOptions {
   RobustKernel observation_kernel = RobustKernel::kCauchy;
   // Loop-closure edges (Cauchy, as in the back end).
   RobustKernel loop_kernel = RobustKernel::kCauchy;
-  // kernel_width (sigmas) applies to both kernels. Each solve runs until a
-  // step lowers the cost by less than 10⁻⁵ of it, at most 100 LM steps: far
+  // kernel_width (sigmas) applies to both kernels. The returned solve runs
+  // until a step lowers the cost by less than 10⁻⁵ of it, at most 100 LM
+  // steps (the verification rounds' solves stop earlier, below): far
   // below the cost's own spread (√(2·dof), about 0.5 % of it on Intel), and
   // the logs' trajectories equal those at 10⁻⁶ to 0.1 mm in 45 % of the
   // steps (docs/offline.md). With the re-association below, the
