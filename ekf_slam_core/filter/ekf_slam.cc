@@ -111,8 +111,7 @@ FilterStatus EkfSlam::predict(const Pose2& odom_previous, const Pose2& odom_curr
 FilterStatus EkfSlam::predict(const OdometryControl& u, double dt, bool jump_check) {
   if (!u.allFinite() || !std::isfinite(dt)) return FilterStatus::kNonFiniteInput;
   if (!(dt > 0.0)) return FilterStatus::kBadTimeStep;
-  if (jump_check && (std::abs(u.trans) > options_.max_step_translation ||
-                     std::abs(wrapAngle(u.rot1 + u.rot2)) > options_.max_step_rotation)) {
+  if (jump_check && options_.isJump(u)) {
     return FilterStatus::kOdometryJump;
   }
   Matrix3 F, G;

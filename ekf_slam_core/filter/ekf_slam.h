@@ -27,6 +27,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cassert>
+#include <cmath>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -52,6 +53,14 @@ struct FilterOptions {
   // estimates and gains spurious heading information: its heading is
   // overconfident on long runs. Off: the textbook EKF (thesis).
   bool first_estimate_jacobians = false;
+
+  // Whether an odometry increment is a jump (beyond max_step_*): the filter
+  // refuses it, the pipeline counts a forced one and gives the full
+  // smoother no wheel edge across it. A non-finite increment is one too.
+  bool isJump(const OdometryControl& u) const {
+    return !(std::abs(u.trans) <= max_step_translation &&
+             std::abs(wrapAngle(u.rot1 + u.rot2)) <= max_step_rotation);
+  }
 
   // The fields a configuration sets; laser_pose is a pose, checked in
   // validate() (finite).

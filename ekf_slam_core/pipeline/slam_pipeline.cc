@@ -330,10 +330,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
     const FilterStatus status = filter_.predict(last_odometry_, odometry, dt, !accept);
     if (status == FilterStatus::kOk && accept) {
       accept_next_motion_ = false;
-      if (std::abs(control.trans) > options_.filter.max_step_translation ||
-          std::abs(wrapAngle(control.rot1 + control.rot2)) > options_.filter.max_step_rotation) {
-        ++counters_.accepted_large_moves;
-      }
+      if (options_.filter.isJump(control)) ++counters_.accepted_large_moves;
     }
     if (status != FilterStatus::kOk) {
       const Pose2 motion = between(last_odometry_, odometry);
@@ -366,8 +363,7 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   const Pose2 wheels = between(last_raw_odometry_, current_raw_odometry_);
   const bool wheels_usable =
       scan_matcher_ != nullptr && predict &&
-      std::hypot(wheels.x, wheels.y) <= options_.filter.max_step_translation &&
-      std::abs(wheels.theta) <= options_.filter.max_step_rotation;
+      !options_.filter.isJump(controlFromOdometry(last_raw_odometry_, current_raw_odometry_));
   last_odometry_ = odometry;
   last_local_pose_ = local_pose_;
   last_raw_odometry_ = current_raw_odometry_;
