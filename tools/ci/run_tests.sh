@@ -57,7 +57,17 @@ fi
 # A test program that crashed writes no results ("did not generate test
 # results"); rostest's own log names the process and the signal it died of.
 grep -h 'process has died.*exit code -' "$ROS_HOME"/log/rostest-*.log 2>/dev/null | cut -c1-240 | tail -n 20 || true
+# Each test target leaves one result file (rosunit's are a rostest's
+# inner report); fewer means results were lost, and the counts below are
+# short by whatever they held.
+expected=$(( ${#drive[@]} + ${#rest[@]} ))
+found=$(find "$results" -name 'gtest-*.xml' -o -name 'rostest-*.xml' -o -name 'roslaunch-check*.xml' | wc -l)
+if [ "$found" -lt "$expected" ]; then
+  echo "run_tests: $found result files for $expected test targets: some results were lost" >&2
+  lost=1
+fi
 /usr/bin/python3 "$root/tools/ci/test_summary.py" "$results"
 summary=$?
+[ "${lost:-0}" = 1 ] && summary=1
 [ $status -ne 0 ] && exit $status
 exit $summary
