@@ -90,7 +90,42 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
   try {
     rosbag::Bag bag;
     bag.open(path, rosbag::bagmode::Read);
-    rosbag::View view(bag);
+    // The laser mount from /tf_static first (a message or two at the start
+    // of the bag). Where it is there and the odometry comes from /odom,
+    // the main pass leaves /tf out: the real logs carry tens of thousands
+    // of /tf messages that hold only odom → base_link, and deserialising
+    // them cost a tenth of reading the bag. A mount on /tf_static is taken
+    // over one on /tf.
+    std::string laser_frame;
+    {
+      rosbag::View first_scan(bag, rosbag::TopicQuery(options.scan_topic));
+      for (const rosbag::MessageInstance& m : first_scan) {
+        const sensor_msgs::LaserScan::ConstPtr msg = m.instantiate<sensor_msgs::LaserScan>();
+        if (msg) laser_frame = stripSlash(msg->header.frame_id);
+        break;
+      }
+    }
+    bool static_mount = laser_frame == base_frame;
+    {
+      rosbag::View statics(bag, rosbag::TopicQuery("/tf_static"));
+      for (const rosbag::MessageInstance& m : statics) {
+        const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
+        if (!msg) continue;
+        for (const auto& t : msg->transforms) {
+          if (stripSlash(t.header.frame_id) != base_frame) continue;
+          const std::string child = stripSlash(t.child_frame_id);
+          static_children.emplace_back(child,
+                                       Pose2(t.transform.translation.x, t.transform.translation.y,
+                                             ros_conversions::yawOf(t.transform.rotation)));
+          static_mount |= child == laser_frame;
+        }
+      }
+    }
+    const bool read_tf = options.odometry_source == "tf" || !static_mount;
+    std::vector<std::string> topics{options.scan_topic};
+    if (options.odometry_source == "odom") topics.push_back(options.odom_topic);
+    if (read_tf) topics.push_back("/tf");
+    rosbag::View view(bag, rosbag::TopicQuery(topics));
     for (const rosbag::MessageInstance& m : view) {
       const std::string& topic = m.getTopic();
       if (topic == options.scan_topic) {
@@ -108,7 +143,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         const auto& p = msg->pose.pose;
         track.add(msg->header.stamp.toSec(),
                   Pose2(p.position.x, p.position.y, ros_conversions::yawOf(p.orientation)));
-      } else if (topic == "/tf" || topic == "/tf_static") {
+      } else if (topic == "/tf") {
         const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
         if (!msg) continue;
         for (const auto& t : msg->transforms) {
@@ -120,7 +155,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
           if (options.odometry_source == "tf" && parent == odom_frame && child == base_frame) {
             track.add(t.header.stamp.toSec(), pose);
             tf_buffer.setTransform(t, "bag");
-          } else if (parent == base_frame) {
+          } else if (parent == base_frame && !static_mount) {
             static_children.emplace_back(child, pose);
           }
         }

@@ -10,6 +10,8 @@
 //   sample and are counted.
 // - "no return" ranges above range_max and an all-zero odometry covariance:
 //   passed through; the scan and motion models handle them.
+// - the laser mount (base_link → the scans' frame): from /tf_static; from
+//   /tf only where /tf_static does not hold it (it is then read whole).
 #pragma once
 
 #include <cstdint>

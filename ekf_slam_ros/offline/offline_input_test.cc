@@ -257,8 +257,14 @@ TEST(SlamConfig, ValidateAndTheLoaderReadTheSameBounds) {
   EXPECT_GT(checked, 120) << "numeric fields with a finite bound";
 }
 
+// Where a bag carries the laser mount: /tf_static (0.16 m ahead, as the
+// Freiburg logs), /tf with every scan (0.20 m, as a driver that publishes
+// its mount dynamically), or both.
+enum class MountOn { kTfStatic, kTf, kBoth };
+
 // A small bag as the Freiburg logs are laid out: /scan, /odom, /tf_static.
-std::string writeBag(const std::string& path, bool with_odometry, int scans = 20) {
+std::string writeBag(const std::string& path, bool with_odometry, int scans = 20,
+                     MountOn mount_on = MountOn::kTfStatic) {
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   for (int i = 0; i < scans; ++i) {
     const ros::Time t(100.0 + 0.1 * i);
@@ -280,15 +286,28 @@ std::string writeBag(const std::string& path, bool with_odometry, int scans = 20
       odom.pose.pose.orientation.w = 1.0;
       bag.write("/odom", odom.header.stamp, odom);
     }
+    if (mount_on != MountOn::kTfStatic) {
+      tf2_msgs::TFMessage tf;
+      geometry_msgs::TransformStamped mount;
+      mount.header.stamp = t;
+      mount.header.frame_id = "base_link";
+      mount.child_frame_id = "laser";
+      mount.transform.translation.x = 0.20;
+      mount.transform.rotation.w = 1.0;
+      tf.transforms.push_back(mount);
+      bag.write("/tf", t, tf);
+    }
   }
-  tf2_msgs::TFMessage statics;
-  geometry_msgs::TransformStamped mount;
-  mount.header.frame_id = "base_link";
-  mount.child_frame_id = "laser";
-  mount.transform.translation.x = 0.16;
-  mount.transform.rotation.w = 1.0;
-  statics.transforms.push_back(mount);
-  bag.write("/tf_static", ros::Time(100.0), statics);
+  if (mount_on != MountOn::kTf) {
+    tf2_msgs::TFMessage statics;
+    geometry_msgs::TransformStamped mount;
+    mount.header.frame_id = "base_link";
+    mount.child_frame_id = "laser";
+    mount.transform.translation.x = 0.16;
+    mount.transform.rotation.w = 1.0;
+    statics.transforms.push_back(mount);
+    bag.write("/tf_static", ros::Time(100.0), statics);
+  }
   bag.close();
   return path;
 }
@@ -311,6 +330,18 @@ TEST_F(TempBag, ReadsScansOdometryAndTheLaserMount) {
   // The last scan lies after the last odometry sample: counted, not invented.
   EXPECT_EQ(log.odometry_gaps, 1);
   EXPECT_EQ(log.scans_out_of_time_order, 0);
+}
+
+TEST_F(TempBag, AMountOnlyOnTfIsFoundAndTfStaticGoesFirst) {
+  LogData log;
+  writeBag(path_, true, 20, MountOn::kTf);
+  ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
+  EXPECT_TRUE(log.laser_pose_found);
+  EXPECT_DOUBLE_EQ(log.laser_pose.x, 0.20);
+  writeBag(path_, true, 20, MountOn::kBoth);
+  ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
+  EXPECT_TRUE(log.laser_pose_found);
+  EXPECT_DOUBLE_EQ(log.laser_pose.x, 0.16) << "the declared static mount";
 }
 
 TEST_F(TempBag, ABagWithoutOdometryIsRefusedByName) {
