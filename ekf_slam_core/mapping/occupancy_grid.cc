@@ -30,16 +30,21 @@ bool OccupancyGrid::cellOf(double x, double y, int* ix, int* iy) const {
   return true;
 }
 
+bool OccupancyGrid::contains(const Vector2& a, const Vector2& b) const {
+  const double res = options_.resolution;
+  const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
+  const double min_y = std::min(a.y(), b.y()), max_y = std::max(a.y(), b.y());
+  return width_ > 0 && min_x >= origin_.x() && min_y >= origin_.y() &&
+         max_x < origin_.x() + width_ * res && max_y < origin_.y() + height_ * res;
+}
+
 bool OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
   if (!a.allFinite() || !b.allFinite()) return false;
+  if (contains(a, b)) return true;
   const double res = options_.resolution;
   const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
   const double min_y = std::min(a.y(), b.y()), max_y = std::max(a.y(), b.y());
   const double cur_max_x = origin_.x() + width_ * res, cur_max_y = origin_.y() + height_ * res;
-  if (width_ > 0 && min_x >= origin_.x() && min_y >= origin_.y() && max_x < cur_max_x &&
-      max_y < cur_max_y) {
-    return true;
-  }
   const double margin = options_.grow_margin;
   double new_min_x = min_x - margin, new_min_y = min_y - margin;
   double new_max_x = max_x + margin, new_max_y = max_y + margin;
@@ -110,6 +115,11 @@ void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
 void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
   if (!laser_pose.allFinite()) return;
   const Vector2 origin = laser_pose.translation();
+  // Where the grid holds the square that every ray of the scan stays in,
+  // no ray needs the test of its own (rounding keeps |r cos| <= r).
+  const Vector2 reach =
+      Vector2::Constant(std::max(options_.max_insert_range, options_.no_return_free_range));
+  const bool covered = contains(origin - reach, origin + reach);
   for (int i = 0; i < scan.size(); ++i) {
     const double r = scan.ranges[i];
     bool hit = scan.isValid(i);
@@ -125,7 +135,7 @@ void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
     const double bearing = laser_pose.theta + scan.angle(i);
     if (!std::isfinite(bearing)) continue;  // a sweep whose bearings overflow
     const Vector2 end = origin + length * Vector2(std::cos(bearing), std::sin(bearing));
-    if (!ensureContains(origin, end)) {
+    if (!covered && !ensureContains(origin, end)) {
       ++rays_beyond_limit_;
       continue;
     }

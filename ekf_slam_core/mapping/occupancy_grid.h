@@ -93,6 +93,8 @@ class OccupancyGrid {
 
  private:
   bool cellOf(double x, double y, int* ix, int* iy) const;
+  // Whether the grid holds the rectangle with corners a and b.
+  bool contains(const Vector2& a, const Vector2& b) const;
   // False when holding [a, b] would exceed max_cells (nothing changes).
   bool ensureContains(const Vector2& a, const Vector2& b);
   void traceRay(int x0, int y0, int x1, int y1, bool mark_end);
