@@ -76,25 +76,34 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
   // edges (pad_[k]); cells beyond it are 0 at every level.
   for (int k = 1; k < options.levels; ++k) {
     const int h = 1 << (k - 1);
+    const std::vector<float>& previous = levels_[k - 1];
+    const int previous_width = width_ + pad_.back();
     const int pad = pad_.back() + h;
     const int w = width_ + pad, ht = height_ + pad;
-    std::vector<double>& along_x = scratch_;
-    along_x.assign(static_cast<size_t>(w) * ht, 0.0);
-    for (int y = 0; y < ht; ++y) {
+    // Row y, column x of the maxima along x holds the larger of the previous
+    // level's cells (x − h, y − h) and (x, y − h) in its own indices, 0
+    // outside it: the first h rows lie wholly outside.
+    std::vector<float>& along_x = along_x_;
+    along_x.assign(static_cast<size_t>(w) * ht, 0.0f);
+    for (int y = h; y < ht; ++y) {
+      const float* in = previous.data() + static_cast<size_t>(y - h) * previous_width;
+      float* out = along_x.data() + static_cast<size_t>(y) * w;
       for (int x = 0; x < w; ++x) {
-        along_x[static_cast<size_t>(y) * w + x] =
-            std::max(value(k - 1, x - pad, y - pad), value(k - 1, x - pad + h, y - pad));
+        const float left = x >= h && x - h < previous_width ? in[x - h] : 0.0f;
+        const float right = x < previous_width ? in[x] : 0.0f;
+        out[x] = std::max(left, right);
       }
     }
     std::vector<float>& level = levels_[k];
     level.assign(along_x.size(), 0.0f);
     for (int y = 0; y < ht; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const float a = static_cast<float>(along_x[static_cast<size_t>(y) * w + x]);
-        level[static_cast<size_t>(y) * w + x] =
-            y + h < ht
-                ? std::max(a, static_cast<float>(along_x[static_cast<size_t>(y + h) * w + x]))
-                : a;
+      const float* row = along_x.data() + static_cast<size_t>(y) * w;
+      float* out = level.data() + static_cast<size_t>(y) * w;
+      if (y + h < ht) {
+        const float* above = row + static_cast<size_t>(h) * w;
+        for (int x = 0; x < w; ++x) out[x] = std::max(row[x], above[x]);
+      } else {
+        std::copy(row, row + w, out);
       }
     }
     pad_.push_back(pad);
@@ -103,7 +112,7 @@ void LikelihoodGrid::build(const std::vector<Vector2>& points,
 }
 
 size_t LikelihoodGrid::storageBytes() const {
-  size_t bytes = scratch_.capacity() * sizeof(double);
+  size_t bytes = scratch_.capacity() * sizeof(double) + along_x_.capacity() * sizeof(float);
   for (const std::vector<float>& level : levels_) bytes += level.capacity() * sizeof(float);
   return bytes;
 }

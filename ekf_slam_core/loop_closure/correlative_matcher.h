@@ -93,9 +93,10 @@ class LikelihoodGrid {
   int level_count_ = 0;                     // levels in use; levels_ may hold more buffers
   std::vector<std::vector<float>> levels_;  // level k: (width + pad_[k]) × (height + pad_[k])
   std::vector<int> pad_;                    // cells level k extends below the grid's lower edges
-  // build's scratch: first each fine cell's squared distance to its
-  // nearest point, then a level's maxima along x (floats, held exactly)
+  // build's scratch: each fine cell's squared distance to its nearest
+  // point, and a level's maxima along x
   std::vector<double> scratch_;
+  std::vector<float> along_x_;
 };
 
 struct CorrelativeResult {

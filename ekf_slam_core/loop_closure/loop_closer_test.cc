@@ -171,6 +171,39 @@ TEST(LikelihoodGrid, FineLevelIsTheLikelihoodOfTheNearestPoint) {
   EXPECT_GT(positive, 100);
 }
 
+// Level k is the definition of the bound: at cell (x, y) the largest fine
+// value over the block [x, x + 2^k) × [y, y + 2^k), blocks reaching in from
+// below the grid's lower edges included, and 0 for a block wholly outside.
+TEST(LikelihoodGrid, EachLevelIsTheMaximumOverItsBlock) {
+  const sim::PolygonWorld world = hall();
+  std::mt19937 rng(5);
+  const std::vector<Vector2> points = placedSweep(world, Pose2(0.5, 0.5, -1.0), &rng);
+  CorrelativeMatcherOptions options;
+  options.levels = 5;
+  const LikelihoodGrid grid(points, options);
+  ASSERT_EQ(grid.levels(), 5);
+  int ix_end, iy_end;
+  grid.cellOf(grid.upperCorner(), &ix_end, &iy_end);
+  long checked = 0, positive = 0, wrong = 0;
+  for (int level = 1; level < grid.levels(); ++level) {
+    const int size = 1 << level;
+    for (int iy = -size - 1; iy <= iy_end + 1; iy += 2) {
+      for (int ix = -size - 1; ix <= ix_end + 1; ix += 2) {
+        float expected = 0.0f;
+        for (int y = iy; y < iy + size; ++y) {
+          for (int x = ix; x < ix + size; ++x) expected = std::max(expected, grid.fine(x, y));
+        }
+        wrong += grid.value(level, ix, iy) != expected;
+        ++checked;
+        positive += expected > 0.0f;
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(positive, 500);
+}
+
 // A window of ±60 m and any heading around a guess 25 m and 150 deg off:
 // the multi-level bound prunes the empty space, and the pose is found.
 TEST(CorrelativeSearch, FindsThePoseAnywhereInAHugeWindowAtAnyHeading) {
