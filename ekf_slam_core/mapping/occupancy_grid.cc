@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -94,10 +95,15 @@ void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
   const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
   int err = dx + dy;
   const float clamp = static_cast<float>(options_.clamp_log_odds);
+  // Held in locals: a store through the cell pointer could otherwise alias
+  // the members, and they would be read again for every cell.
+  const float miss = log_miss_;
+  float* const cells = log_odds_.data();
+  const ptrdiff_t stride = width_;
   int x = x0, y = y0;
   while (x != x1 || y != y1) {
-    float& cell = at(x, y);
-    cell = std::max(-clamp, cell + log_miss_);
+    float& cell = cells[y * stride + x];
+    cell = std::max(-clamp, cell + miss);
     const int e2 = 2 * err;
     if (e2 >= dy) {
       err += dy;
