@@ -20,15 +20,30 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 from ekf_slam_tools.worlds import read_pgm  # noqa: E402
 
+# libyaml's loader where PyYAML has it: a tenth of the pure-Python one's time.
+YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
-def show_map(ax, out_dir, base, title):
-    meta = yaml.safe_load(open(os.path.join(out_dir, base + ".yaml")))
+
+def show_map(ax, out_dir, base, title, traj, margin=5.0):
+    """The map image around traj's extent (crop_to's view), axes cropped to it."""
+    meta = yaml.load(open(os.path.join(out_dir, base + ".yaml")), Loader=YamlLoader)
     image = read_pgm(os.path.join(out_dir, meta["image"]))
     res = float(meta["resolution"])
     x0, y0 = meta["origin"][0], meta["origin"][1]
     h, w = image.shape
-    ax.imshow(image, cmap="gray", vmin=0, vmax=255, origin="upper",
-              extent=[x0, x0 + w * res, y0, y0 + h * res])
+    # Only the part in view goes to imshow, whole pixels on the map's
+    # lattice: the same picture, without resampling the rest of a large map.
+    lo_x, hi_x, lo_y, hi_y = crop_to(ax, traj, margin)
+    c0 = min(max(int((lo_x - x0) / res) - 1, 0), w)
+    c1 = min(max(int((hi_x - x0) / res) + 2, c0), w)
+    r0 = min(max(int((lo_y - y0) / res) - 1, 0), h)
+    r1 = min(max(int((hi_y - y0) / res) + 2, r0), h)
+    # Image rows run from the top (largest y) down.
+    view = image[h - r1:h - r0, c0:c1]
+    if view.size:
+        ax.imshow(view, cmap="gray", vmin=0, vmax=255, origin="upper",
+                  extent=[x0 + c0 * res, x0 + c1 * res, y0 + r0 * res, y0 + r1 * res])
+    crop_to(ax, traj, margin)
     ax.set_title(title, fontsize=10)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -51,8 +66,12 @@ def in_frame_of(traj, first_pose):
 
 
 def crop_to(ax, traj, margin=5.0):
-    ax.set_xlim(traj[:, 1].min() - margin, traj[:, 1].max() + margin)
-    ax.set_ylim(traj[:, 2].min() - margin, traj[:, 2].max() + margin)
+    """Limits the view to traj's extent plus margin; returns the limits."""
+    lo_x, hi_x = traj[:, 1].min() - margin, traj[:, 1].max() + margin
+    lo_y, hi_y = traj[:, 2].min() - margin, traj[:, 2].max() + margin
+    ax.set_xlim(lo_x, hi_x)
+    ax.set_ylim(lo_y, hi_y)
+    return lo_x, hi_x, lo_y, hi_y
 
 
 def save(fig, out_dir, name):
@@ -69,7 +88,7 @@ def main(out_dir):
     odometry = trajectory(out_dir, "odometry")
 
     fig, axes = plt.subplots(1, 2, figsize=(14, 7))
-    show_map(axes[0], out_dir, "map", "EKF-SLAM (smoothed) map and path")
+    show_map(axes[0], out_dir, "map", "EKF-SLAM (smoothed) map and path", smoothed)
     axes[0].plot(smoothed[:, 1], smoothed[:, 2], color="tab:blue", lw=0.6, label="smoothed path")
     # The scan-matching front end's own track (the filter's control), when it ran.
     if os.path.exists(os.path.join(out_dir, "trajectory_scan_matched.txt")):
@@ -77,13 +96,14 @@ def main(out_dir):
         matched = in_frame_of(trajectory(out_dir, "scan_matched"), smoothed[0])
         axes[0].plot(matched[:, 1], matched[:, 2], color="tab:green", lw=0.5, ls="--",
                      label="scan-matched control")
-    landmarks = yaml.safe_load(open(os.path.join(out_dir, "landmarks.yaml")))["landmarks"] or []
+    landmarks = yaml.load(open(os.path.join(out_dir, "landmarks.yaml")),
+                          Loader=YamlLoader)["landmarks"] or []
     if landmarks:
         axes[0].scatter([l["x"] for l in landmarks], [l["y"] for l in landmarks], s=4,
                         color="tab:red", label="landmarks")
     axes[0].legend(loc="upper right", fontsize=8)
     crop_to(axes[0], smoothed)
-    show_map(axes[1], out_dir, "map_odometry", "odometry only")
+    show_map(axes[1], out_dir, "map_odometry", "odometry only", odometry)
     axes[1].plot(odometry[:, 1], odometry[:, 2], color="tab:red", lw=0.6)
     crop_to(axes[1], odometry)
     save(fig, out_dir, "fig_map_slam_vs_odometry.png")
@@ -104,10 +124,8 @@ def main(out_dir):
     save(fig, out_dir, "fig_first_last_scans.png")
 
     fig, axes = plt.subplots(1, 2, figsize=(14, 7))
-    show_map(axes[0], out_dir, "map_filtered", "grid from the filtered poses")
-    crop_to(axes[0], filtered)
-    show_map(axes[1], out_dir, "map", "grid from the smoothed poses")
-    crop_to(axes[1], smoothed)
+    show_map(axes[0], out_dir, "map_filtered", "grid from the filtered poses", filtered)
+    show_map(axes[1], out_dir, "map", "grid from the smoothed poses", smoothed)
     save(fig, out_dir, "fig_smoothing.png")
     print("figures written to " + out_dir)
 
