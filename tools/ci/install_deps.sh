@@ -26,7 +26,7 @@ PACKAGES=(
   libeigen3-dev libboost-dev libgtest-dev googletest libbenchmark-dev libyaml-cpp-dev
   libceres-dev
   # figures
-  python3-matplotlib python3-numpy python3-yaml
+  python3-matplotlib python3-numpy python3-pil python3-yaml
   # rviz (sim.launch rviz:=true) and its headless smoke test / screenshot
   rviz xvfb x11-apps
   # the robot's frames (robot.launch) and the description's check
