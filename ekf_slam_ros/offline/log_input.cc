@@ -114,9 +114,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         for (const auto& t : msg->transforms) {
           if (stripSlash(t.header.frame_id) != base_frame) continue;
           const std::string child = stripSlash(t.child_frame_id);
-          static_children.emplace_back(child,
-                                       Pose2(t.transform.translation.x, t.transform.translation.y,
-                                             ros_conversions::yawOf(t.transform.rotation)));
+          static_children.emplace_back(child, ros_conversions::fromTransformMessage(t.transform));
           static_mount |= child == laser_frame;
         }
       }
@@ -140,18 +138,14 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
       } else if (options.odometry_source == "odom" && topic == options.odom_topic) {
         const nav_msgs::Odometry::ConstPtr msg = m.instantiate<nav_msgs::Odometry>();
         if (!msg) return path + ": topic " + topic + " is not nav_msgs/Odometry";
-        const auto& p = msg->pose.pose;
-        track.add(msg->header.stamp.toSec(),
-                  Pose2(p.position.x, p.position.y, ros_conversions::yawOf(p.orientation)));
+        track.add(msg->header.stamp.toSec(), ros_conversions::fromPoseMessage(msg->pose.pose));
       } else if (topic == "/tf") {
         const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
         if (!msg) continue;
         for (const auto& t : msg->transforms) {
           const std::string parent = stripSlash(t.header.frame_id);
           const std::string child = stripSlash(t.child_frame_id);
-          const auto& r = t.transform.rotation;
-          const Pose2 pose(t.transform.translation.x, t.transform.translation.y,
-                           ros_conversions::yawOf(r));
+          const Pose2 pose = ros_conversions::fromTransformMessage(t.transform);
           if (options.odometry_source == "tf" && parent == odom_frame && child == base_frame) {
             track.add(t.header.stamp.toSec(), pose);
             tf_buffer.setTransform(t, "bag");
@@ -197,9 +191,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         stamp.fromNSec(static_cast<uint64_t>(s.stamp_ns));
         const geometry_msgs::TransformStamped t =
             tf_buffer.lookupTransform(odom_frame, base_frame, stamp);
-        const auto& r = t.transform.rotation;
-        s.odometry =
-            Pose2(t.transform.translation.x, t.transform.translation.y, ros_conversions::yawOf(r));
+        s.odometry = ros_conversions::fromTransformMessage(t.transform);
       } catch (const tf2::TransformException&) {
         // Before the first or after the last sample: the track's nearest.
       }

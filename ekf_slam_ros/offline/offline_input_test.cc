@@ -262,6 +262,19 @@ TEST(SlamConfig, ValidateAndTheLoaderReadTheSameBounds) {
 // its mount dynamically), or both.
 enum class MountOn { kTfStatic, kTf, kBoth };
 
+// base_link → laser, x metres ahead, as one tf message.
+tf2_msgs::TFMessage laserMount(double x, const ros::Time& stamp) {
+  geometry_msgs::TransformStamped mount;
+  mount.header.stamp = stamp;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "laser";
+  mount.transform.translation.x = x;
+  mount.transform.rotation.w = 1.0;
+  tf2_msgs::TFMessage message;
+  message.transforms.push_back(mount);
+  return message;
+}
+
 // A small bag as the Freiburg logs are laid out: /scan, /odom, /tf_static.
 std::string writeBag(const std::string& path, bool with_odometry, int scans = 20,
                      MountOn mount_on = MountOn::kTfStatic) {
@@ -286,28 +299,10 @@ std::string writeBag(const std::string& path, bool with_odometry, int scans = 20
       odom.pose.pose.orientation.w = 1.0;
       bag.write("/odom", odom.header.stamp, odom);
     }
-    if (mount_on != MountOn::kTfStatic) {
-      tf2_msgs::TFMessage tf;
-      geometry_msgs::TransformStamped mount;
-      mount.header.stamp = t;
-      mount.header.frame_id = "base_link";
-      mount.child_frame_id = "laser";
-      mount.transform.translation.x = 0.20;
-      mount.transform.rotation.w = 1.0;
-      tf.transforms.push_back(mount);
-      bag.write("/tf", t, tf);
-    }
+    if (mount_on != MountOn::kTfStatic) bag.write("/tf", t, laserMount(0.20, t));
   }
-  if (mount_on != MountOn::kTf) {
-    tf2_msgs::TFMessage statics;
-    geometry_msgs::TransformStamped mount;
-    mount.header.frame_id = "base_link";
-    mount.child_frame_id = "laser";
-    mount.transform.translation.x = 0.16;
-    mount.transform.rotation.w = 1.0;
-    statics.transforms.push_back(mount);
-    bag.write("/tf_static", ros::Time(100.0), statics);
-  }
+  if (mount_on != MountOn::kTf)
+    bag.write("/tf_static", ros::Time(100.0), laserMount(0.16, ros::Time()));
   bag.close();
   return path;
 }
