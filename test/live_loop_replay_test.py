@@ -4,9 +4,11 @@
 1. Plays the first --seconds of the bag on /clock at --rate into slam.launch
    (built-in configuration) and records what the node publishes: pose,
    map, loop_closed_path, tf map -> odom, /diagnostics.
-2. Runs ekf_slam_offline on the same scans (--max-scans: as many as the
-   node processed), with the same loop_closure.correction_delay, and
-   compares its trajectory_live.txt with the published poses, scan by scan.
+2. Runs ekf_slam_offline on the scans the node processed (a copy of the
+   log without the scans it published no pose for: those it dropped, e.g.
+   when a loaded machine let it fall behind the transforms it buffers),
+   with the same loop_closure.correction_delay, and compares its
+   trajectory_live.txt with the published poses, scan by scan.
 
 Checks: the map arrives while the log plays, with values -1 / 0 / 100 only
 and walls in it; loops are accepted and each moves map -> odom far more
@@ -25,6 +27,8 @@ import argparse
 import bisect
 import math
 import os
+import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -64,6 +68,7 @@ class LiveLoopReplay(unittest.TestCase):
         self.maps = []
         self.loop_paths = []  # stamps of loop_closed_path messages
         self.loops_accepted = 0
+        self.drops = {}  # the node's "dropped: <reason>" counters
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("map", OccupancyGrid, self.on_map, queue_size=5)
         rospy.Subscriber("loop_closed_path", Path, self.on_loop_path, queue_size=100)
@@ -96,6 +101,8 @@ class LiveLoopReplay(unittest.TestCase):
             for kv in status.values:
                 if kv.key == "loops accepted":
                     self.loops_accepted = max(self.loops_accepted, int(kv.value))
+                elif kv.key.startswith("dropped: ") and int(kv.value) > 0:
+                    self.drops[kv.key[len("dropped: "):]] = int(kv.value)
 
     def play(self):
         deadline = time.time() + 30.0
@@ -110,25 +117,46 @@ class LiveLoopReplay(unittest.TestCase):
             last = len(self.poses)
             time.sleep(2.0)
 
-    def offline(self, scans):
+    def offline(self, processed):
+        """trajectory_live.txt of ekf_slam_offline on the scans in `processed`.
+
+        A scan the node dropped never touched its state: the offline runner
+        must not see it either. It reads a copy of the log with every other
+        message (odometry, transforms) and only the scans whose stamps
+        (rounded to 1 µs) are in `processed`.
+        """
         out = tempfile.mkdtemp(prefix="ekf_slam_live_loop_")
-        exe = subprocess.check_output(["catkin_find", "--first-only", "--libexec", "ekf_slam",
-                                       "ekf_slam_offline"]).decode().split()[0]
-        # The odometry looked up in tf as the node looks it up (the built-in
-        # defaults otherwise).
-        config = os.path.join(out, "odometry_from_tf.yaml")
-        with open(config, "w") as f:
-            f.write("input:\n  odometry_source: tf\n")
-            f.write("loop_closure:\n  correction_delay: %d\n" % self.args.correction_delay)
-        subprocess.check_call([exe, "--bag", self.args.bag, "--out", out, "--no-maps",
-                               "--config", config, "--max-scans", str(scans)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        rows = []
-        with open(os.path.join(out, "trajectory_live.txt")) as f:
-            for line in f:
-                if line.strip() and not line.startswith("#"):
-                    rows.append(tuple(float(v) for v in line.split()[:4]))
-        return rows
+        try:
+            bag = os.path.join(out, "processed_scans.bag")
+            kept = 0
+            with rosbag.Bag(self.args.bag) as source, rosbag.Bag(bag, "w") as copy:
+                for topic, raw, t in source.read_messages(raw=True):
+                    if topic == "/scan":
+                        # LaserScan starts with its header: seq, stamp.secs, stamp.nsecs.
+                        secs, nsecs = struct.unpack_from("<II", raw[1], 4)
+                        if round(secs + 1e-9 * nsecs, 6) not in processed:
+                            continue
+                        kept += 1
+                    copy.write(topic, raw, t, raw=True)
+            exe = subprocess.check_output(["catkin_find", "--first-only", "--libexec", "ekf_slam",
+                                           "ekf_slam_offline"]).decode().split()[0]
+            # The odometry looked up in tf as the node looks it up (the
+            # built-in defaults otherwise).
+            config = os.path.join(out, "odometry_from_tf.yaml")
+            with open(config, "w") as f:
+                f.write("input:\n  odometry_source: tf\n")
+                f.write("loop_closure:\n  correction_delay: %d\n" % self.args.correction_delay)
+            subprocess.check_call([exe, "--bag", bag, "--out", out, "--no-maps", "--config",
+                                   config, "--max-scans", str(kept)],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            rows = []
+            with open(os.path.join(out, "trajectory_live.txt")) as f:
+                for line in f:
+                    if line.strip() and not line.startswith("#"):
+                        rows.append(tuple(float(v) for v in line.split()[:4]))
+            return rows
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
 
     def corrections(self):
         """How far each scan's map -> odom moved the robot in the map.
@@ -229,8 +257,14 @@ class LiveLoopReplay(unittest.TestCase):
         last = self.poses[-1][0]
         scans = sum(1 for s in stamps if s <= last + 1e-6)
         scan_rate = (scans - 1) / max(1e-9, last - stamps[0])  # scans per second of log
-        offline = self.offline(scans)
         live = {round(p[0], 6): p for p in self.poses}
+        # Scans the node dropped (a loaded machine lets it fall behind the
+        # transforms it buffers) are left out of the comparison, not
+        # compared with an offline run that used them; most must be there.
+        print("the node published poses for %d of the log's %d scans up to %.3f; dropped: %s" %
+              (len(live), scans, last, self.drops or "none"))
+        self.assertGreater(len(live), 0.9 * scans, "the node dropped scans: %s" % self.drops)
+        offline = self.offline(live)
         compared = worst_position = worst_heading = 0.0
         outside = 0
         first_outside = None
@@ -256,9 +290,10 @@ class LiveLoopReplay(unittest.TestCase):
               " largest %.6f m, %.6f deg" % (compared, len(offline), outside, worst_position,
                                               math.degrees(worst_heading)))
         print("first scan outside: %s; runs of scans outside: %s" % (first_outside, runs))
-        self.assertGreater(compared, 0.98 * len(offline), "the node dropped scans")
+        # Every scan the offline runner processed was one the node published.
+        self.assertGreater(compared, 0.999 * len(offline), "scans missing from the live poses")
         if self.args.correction_delay >= 0:
-            self.assertEqual(outside, 0)
+            self.assertEqual(outside, 0, "first scan outside: %s" % (first_outside,))
             self.assertLess(worst_position, 1e-6)
         else:
             self.assertLessEqual(len(runs), len(self.loop_paths),
