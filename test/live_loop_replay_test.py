@@ -69,6 +69,7 @@ class LiveLoopReplay(unittest.TestCase):
         self.loop_paths = []  # stamps of loop_closed_path messages
         self.loops_accepted = 0
         self.drops = {}  # the node's "dropped: <reason>" counters
+        self.received = 0  # scans the node received
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("map", OccupancyGrid, self.on_map, queue_size=5)
         rospy.Subscriber("loop_closed_path", Path, self.on_loop_path, queue_size=100)
@@ -101,6 +102,8 @@ class LiveLoopReplay(unittest.TestCase):
             for kv in status.values:
                 if kv.key == "loops accepted":
                     self.loops_accepted = max(self.loops_accepted, int(kv.value))
+                elif kv.key == "scans received":
+                    self.received = max(self.received, int(kv.value))
                 elif kv.key.startswith("dropped: ") and int(kv.value) > 0:
                     self.drops[kv.key[len("dropped: "):]] = int(kv.value)
 
@@ -261,8 +264,8 @@ class LiveLoopReplay(unittest.TestCase):
         # Scans the node dropped (a loaded machine lets it fall behind the
         # transforms it buffers) are left out of the comparison, not
         # compared with an offline run that used them; most must be there.
-        print("the node published poses for %d of the log's %d scans up to %.3f; dropped: %s" %
-              (len(live), scans, last, self.drops or "none"))
+        print("the node received %d and published poses for %d of the log's %d scans up to %.3f;"
+              " dropped: %s" % (self.received, len(live), scans, last, self.drops or "none"))
         self.assertGreater(len(live), 0.9 * scans, "the node dropped scans: %s" % self.drops)
         offline = self.offline(live)
         compared = worst_position = worst_heading = 0.0

@@ -42,6 +42,9 @@ class BadParameters(unittest.TestCase):
     def test_out_of_range_value_names_the_key(self):
         self.check("ekf_slam_node", "tf_timeout", "_tf_timeout:=-1.0")
 
+    def test_too_short_tf_cache_names_the_key(self):
+        self.check("ekf_slam_node", "tf_cache_time", "_tf_cache_time:=0.5")
+
     def test_unknown_key_names_the_key(self):
         self.check("ekf_slam_node", "tf_timout", "_tf_timout:=0.5")
 

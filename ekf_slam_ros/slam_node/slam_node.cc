@@ -25,6 +25,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
       config_(config),
       node_(node),
       private_node_(private_node),
+      tf_buffer_(ros::Duration(params.tf_cache_time)),
       tf_listener_(tf_buffer_, params.max_future_stamp),
       diagnostics_(node, private_node) {
   for (DropReason reason : kAllDropReasons) drops_[reason] = 0;

@@ -217,7 +217,10 @@ bool SlamNode::lookup(const std::string& target, const std::string& source, cons
           return true;
         } catch (const tf2::TransformException&) {
         }
-        text << ": the scan is older than the transforms still buffered (" << e.what() << ")";
+        text << ": the scan is older than the transforms still buffered (" << e.what()
+             << "); the buffer keeps tf_cache_time = " << params_.tf_cache_time
+             << " s before the newest transform: a node that falls further behind (a replay at "
+                "a high rate on a loaded machine) needs a longer one";
       }
     } catch (const tf2::TransformException&) {
       text << ": never received (" << e.what() << ")";
@@ -308,7 +311,10 @@ void SlamNode::onTransformsFailed(const void* message, tf2_ros::FilterFailureRea
   std::string why;
   DropReason drop_reason = DropReason::kQueueOverflow;
   if (!lookup(params_.odom_frame, params_.base_frame, stamp, &unused, &why)) {
-    detail << ": the odometry is silent, " << why;
+    // Too old for the buffer: `why` says so. Overflow: the odometry paused.
+    detail << (reason == tf2_ros::filter_failure_reasons::OutTheBack ? ": "
+                                                                     : ": the odometry is silent, ")
+           << why;
     drop_reason = DropReason::kOdomTransformMissing;
   } else if (!lookup(params_.base_frame, pending.header.frame_id, stamp, &unused, &why)) {
     detail << ": " << why;

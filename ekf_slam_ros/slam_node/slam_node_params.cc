@@ -77,6 +77,7 @@ bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::str
   }
   read.number("tf_timeout", &p->tf_timeout, 0.0, 60.0);
   read.integer("scan_queue_size", &p->scan_queue_size, 1, 10000);
+  read.number("tf_cache_time", &p->tf_cache_time, 1.0, 3600.0);
   read.number("transform_tolerance", &p->transform_tolerance, 0.0, 10.0);
   read.number("tf_publish_rate", &p->tf_publish_rate, 0.1, 1000.0);
   read.integer("min_valid_readings", &p->min_valid_readings, 2, 100000);

@@ -29,6 +29,7 @@ struct SlamNodeParams {
   std::string features_topic = "features";
   double tf_timeout = 0.3;             // s a scan may wait for its transforms
   int scan_queue_size = 30;            // scans waiting for tf at most (oldest dropped)
+  double tf_cache_time = 10.0;         // s of transforms buffered (tf2's default)
   double transform_tolerance = 0.1;    // s map→odom is future-dated by
   double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
   int min_valid_readings = 10;         // fewer usable ranges: the scan is rejected

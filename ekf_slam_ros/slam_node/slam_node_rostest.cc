@@ -490,6 +490,46 @@ TEST_F(SlamNodeTest, AFutureOdometryTransformIsRefusedAndMappingContinues) {
       << "the log must name the frames";
 }
 
+// A scan that reaches the node 3 s after its stamp, while the odometry went
+// on: the node buffers tf_cache_time seconds of transforms before the newest
+// one. With tf2's 10 s (slam_node_services.test) the scan is mapped; with
+// 2 s (slam_node_tf_cache.test: a node that fell that far behind) it is
+// dropped, counted, and the log names the parameter to raise.
+TEST_F(SlamNodeTest, AScanLaterThanTheTfCacheTimeIsDroppedAndNamesIt) {
+  double cache_time = 10.0;
+  ros::param::get(std::string(kNode) + "/tf_cache_time", cache_time);
+  const double kLate = 3.0;  // s
+  robot_.publish_scans = false;
+  ros::WallDuration(0.5).sleep();  // queued scans processed
+  ASSERT_TRUE(freshDiagnostics());
+  const double missing_before = observer_.diagnostic("dropped: odom transform missing");
+  const double iterations_before = observer_.diagnostic("iterations");
+  ASSERT_FALSE(std::isnan(missing_before));
+  const ros::Time stamp = ros::Time::now();
+  ros::WallDuration(kLate).sleep();  // odometry and the laser mount go on at 10 Hz
+  robot_.publishScan(stamp, [](std::vector<float>*) {});
+  if (cache_time > kLate + 1.0) {
+    EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() == stamp; }, 3.0))
+        << "a scan " << kLate << " s late was not mapped with tf_cache_time " << cache_time;
+    ASSERT_TRUE(freshDiagnostics());
+    EXPECT_EQ(observer_.diagnostic("dropped: odom transform missing"), missing_before);
+    EXPECT_GT(observer_.diagnostic("iterations"), iterations_before);
+  } else {
+    EXPECT_TRUE(waitFor(
+        [&] { return observer_.diagnostic("dropped: odom transform missing") > missing_before; },
+        3.0))
+        << "a scan " << kLate << " s late was not dropped with tf_cache_time " << cache_time;
+    EXPECT_NE(observer_.lastPoseStamp(), stamp);
+    EXPECT_EQ(observer_.diagnostic("iterations"), iterations_before);
+    EXPECT_TRUE(observer_.logged("odom transform missing", "tf_cache_time = 2"))
+        << "the log must name the parameter and its value";
+  }
+  // Mapping goes on with the next scans.
+  robot_.publish_scans = true;
+  const ros::Time resumed = ros::Time::now();
+  EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
+}
+
 TEST_F(SlamNodeTest, OutputsCarryTheScansStampsAndFrames) {
   ros::WallDuration(1.0).sleep();
   // Data time: every output is stamped with the stamp of a scan the robot sent.
