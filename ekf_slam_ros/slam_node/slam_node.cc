@@ -34,7 +34,10 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
   if (paused_) ROS_INFO("ekf_slam_node: started paused (start_paused): call ~resume to map");
   path_.header.frame_id = params_.map_frame;
 
-  pose_publisher_ = node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
+  // One pose per scan: a node catching up after a stall (a loaded machine,
+  // a replay) publishes them in bursts, which a slower subscriber (a
+  // recorder, a Python tool) must still receive whole.
+  pose_publisher_ = node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 200);
   path_publisher_ = node_.advertise<nav_msgs::Path>("path", 1, /*latch=*/true);
   odometry_path_publisher_ = node_.advertise<nav_msgs::Path>("odometry_path", 1, /*latch=*/true);
   odometry_path_.header.frame_id = params_.map_frame;
