@@ -136,8 +136,8 @@ class LiveLoopReplay(unittest.TestCase):
                 for topic, raw, t in source.read_messages(raw=True):
                     if topic == "/scan":
                         # LaserScan starts with its header: seq, stamp.secs, stamp.nsecs.
-                        secs, nsecs = struct.unpack_from("<II", raw[1], 4)
-                        if round(secs + 1e-9 * nsecs, 6) not in processed:
+                        stamp = rospy.Time(*struct.unpack_from("<II", raw[1], 4))
+                        if round(stamp.to_sec(), 6) not in processed:
                             continue
                         kept += 1
                     copy.write(topic, raw, t, raw=True)
@@ -266,7 +266,8 @@ class LiveLoopReplay(unittest.TestCase):
         # compared with an offline run that used them; most must be there.
         print("the node received %d and published poses for %d of the log's %d scans up to %.3f;"
               " dropped: %s" % (self.received, len(live), scans, last, self.drops or "none"))
-        self.assertGreater(len(live), 0.9 * scans, "the node dropped scans: %s" % self.drops)
+        self.assertGreater(len(live), 0.9 * scans, "the node dropped scans: %s, received %d" %
+                           (self.drops, self.received))
         offline = self.offline(live)
         compared = worst_position = worst_heading = 0.0
         outside = 0
