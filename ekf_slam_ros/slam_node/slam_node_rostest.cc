@@ -9,6 +9,8 @@
 //   RearLaser.*: a second laser behind the robot (scan_rear, laser_rear)
 //     merged into the scans; bad, stale and unplaceable rear scans leave
 //     the front scans mapped alone, counted and logged.
+//   AScanLater*: a scan 3 s late is mapped within the node's tf buffer
+//     (tf_cache_time) and dropped, naming the parameter, beyond it.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ekf_slam/AssociationReport.h>
 #include <ekf_slam/Features.h>
@@ -495,7 +497,7 @@ TEST_F(SlamNodeTest, AFutureOdometryTransformIsRefusedAndMappingContinues) {
 // one. With tf2's 10 s (slam_node_services.test) the scan is mapped; with
 // 2 s (slam_node_tf_cache.test: a node that fell that far behind) it is
 // dropped, counted, and the log names the parameter to raise.
-TEST_F(SlamNodeTest, AScanLaterThanTheTfCacheTimeIsDroppedAndNamesIt) {
+TEST_F(SlamNodeTest, AScanLaterThanTfCacheTimeIsDroppedNamingItAndMappedWithin) {
   double cache_time = 10.0;
   ros::param::get(std::string(kNode) + "/tf_cache_time", cache_time);
   const double kLate = 3.0;  // s
