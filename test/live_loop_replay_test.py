@@ -56,6 +56,12 @@ HEADING_TOLERANCE = math.radians(0.1)  # … and this at every compared scan
 LATE_CORRECTION_SECONDS = 1.0
 
 
+def scan_stamp(raw):
+    """The header stamp of a LaserScan read raw from a bag, in seconds, as
+    rospy converts it (the header comes first: seq, stamp.secs, stamp.nsecs)."""
+    return rospy.Time(*struct.unpack_from("<II", raw[1], 4)).to_sec()
+
+
 class LiveLoopReplay(unittest.TestCase):
     args = None
 
@@ -135,9 +141,7 @@ class LiveLoopReplay(unittest.TestCase):
             with rosbag.Bag(self.args.bag) as source, rosbag.Bag(bag, "w") as copy:
                 for topic, raw, t in source.read_messages(raw=True):
                     if topic == "/scan":
-                        # LaserScan starts with its header: seq, stamp.secs, stamp.nsecs.
-                        stamp = rospy.Time(*struct.unpack_from("<II", raw[1], 4))
-                        if round(stamp.to_sec(), 6) not in processed:
+                        if round(scan_stamp(raw), 6) not in processed:
                             continue
                         kept += 1
                     copy.write(topic, raw, t, raw=True)
@@ -256,7 +260,7 @@ class LiveLoopReplay(unittest.TestCase):
 
         # The published poses are the offline runner's causal poses.
         with rosbag.Bag(self.args.bag) as bag:
-            stamps = [m.header.stamp.to_sec() for _, m, _ in bag.read_messages(topics=["/scan"])]
+            stamps = [scan_stamp(raw) for _, raw, _ in bag.read_messages(topics=["/scan"], raw=True)]
         last = self.poses[-1][0]
         scans = sum(1 for s in stamps if s <= last + 1e-6)
         scan_rate = (scans - 1) / max(1e-9, last - stamps[0])  # scans per second of log
