@@ -1,0 +1,95 @@
+// The pipeline's link to the loop-closing back end (a pose graph over key
+// scans, inline or on its own thread: loop_closure/back_end.h). It hands
+// every scan to the back end, turns the view the scan is given into the
+// causal estimate in the map frame, and remembers what a correction needs:
+// the filter's pose at each key scan and the loop scan that created each
+// landmark, so that after an optimisation the filter can take the
+// loop-closed geometry (re-anchoring). After the run it turns the graph's
+// loops into constraints between the filter's iterations, and its
+// optimised trajectory into starting poses, for the full smoother.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "ekf_slam_core/loop_closure/back_end.h"
+#include "ekf_slam_core/pipeline/pipeline_options.h"
+#include "ekf_slam_core/pipeline/scan_history.h"
+
+namespace ekf_slam {
+
+class BackEndLink {
+ public:
+  // Inactive (every call a no-op, empty results) without loop closure.
+  explicit BackEndLink(const PipelineOptions& options);
+
+  bool active() const { return back_end_ != nullptr; }
+
+  struct Step {
+    Pose2 causal;            // the loop-closed estimate for the scan (map frame)
+    bool new_loops = false;  // the back end accepted loops since the last scan
+  };
+  // Every scan with a usable odometry, in order: `odometry` is the control
+  // source's pose, `filtered` the pose the filter gave the scan, `record`
+  // the scan's number in the history, `new_landmarks` the ids of the
+  // landmarks the scan created.
+  Step addScan(double stamp, const Scan& scan, const Pose2& odometry, bool usable,
+               const Pose2& filtered, long record, const std::vector<int>& new_landmarks);
+
+  // After new loops: per landmark of `filter` created at a known key scan,
+  // the transform that takes that key scan from where the filter had it to
+  // where the graph has it now. The key scans are taken as re-anchored.
+  std::vector<std::pair<int, Pose2>> reanchorCorrections(const EkfSlam& filter);
+
+  // The history dropped its records before `first_record`: so are the
+  // loop scans that hang off them, and the landmarks `filter` no longer holds.
+  void forgetBefore(long first_record, const EkfSlam& filter);
+
+  // The back end's key scans as the last scan saw them (loop-closed, map
+  // frame), with their readings in the robot frame when asked.
+  struct KeyScan {
+    double stamp = 0.0;
+    Pose2 pose;
+    std::vector<Vector2> points;
+  };
+  std::vector<KeyScan> keyScans(bool with_points) const;
+  long optimisations() const { return view_ ? view_->counters.optimisations : 0; }
+  LoopClosureCounters counters() const { return view_ ? view_->counters : LoopClosureCounters(); }
+  long backlog() const { return back_end_ ? back_end_->backlog() : 0; }
+
+  // The final optimisation after the last scan; then one pose per scan.
+  void finish();
+  std::vector<StampedPose> optimizedScanPoses() const;
+  const LoopCloser* loopCloser() const { return back_end_ ? &back_end_->drained() : nullptr; }
+
+  // For the full smoother over `history`: the graph's loop edges as
+  // constraints between iterations (a loop with an end before the kept
+  // history is left out), and one starting pose per kept iteration from
+  // the optimised graph (empty when an iteration has no scan in it).
+  std::vector<IterationConstraint> loopConstraints(const ScanHistory& history) const;
+  std::vector<Pose2> loopClosedIterationPoses(const ScanHistory& history) const;
+
+ private:
+  // The filter's pose at each key scan the back end has reported.
+  void trackKeyScans();
+
+  Pose2 laser_pose_;
+  std::unique_ptr<LoopClosureBackEnd> back_end_;  // null when loop closure is off
+  std::shared_ptr<const BackEndView> view_;       // the back end as the last scan saw it
+  long loops_seen_ = 0;                           // accepted loops in that view
+  // History record of each scan given to the back end (from loop scan
+  // first_loop_scan_ on; both count from the run's first).
+  std::vector<long> record_of_loop_scan_;
+  int first_loop_scan_ = 0;
+  std::vector<Pose2> key_filtered_;     // the filter's pose at each key scan (map frame)
+  std::deque<Pose2> pending_filtered_;  // the filter's pose at loop scans pending_base_ …
+  long pending_base_ = 0;               // … on, whose key scans the back end may still report
+  std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
+  std::optional<Pose2> map_from_graph_;  // the graph's frame in the map frame (first scan)
+};
+
+}  // namespace ekf_slam

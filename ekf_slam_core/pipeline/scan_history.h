@@ -1,0 +1,91 @@
+// The pipeline's one bounded history: a record per scan (the pose it was
+// given, its odometry and the iteration it hangs off) and the filter's
+// iterations as the smoothers need them. The trajectory files, the
+// smoothers (~smooth, the offline runner) and the back end's loop
+// constraints read it; the causal estimate never does, so the poses a scan
+// is given do not depend on the bound.
+//
+// Bound (PipelineOptions::history_scans): 0 keeps every scan; n > 0 keeps
+// at least the newest n scans (trimmed in steps of n / 8, so at most 9n/8)
+// with the iterations they hang off. The oldest kept iteration then takes
+// the place of the first pose for the full smoother: its prior is the
+// filter's pose and covariance at that iteration.
+#pragma once
+
+#include <vector>
+
+#include "ekf_slam_core/geometry/stamped_pose.h"
+#include "ekf_slam_core/smoother/full_smoother.h"
+#include "ekf_slam_core/smoother/rts_smoother.h"
+
+namespace ekf_slam {
+
+// One entry per scan, for the trajectory files and the smoother.
+struct ScanRecord {
+  double stamp = 0.0;
+  Pose2 filtered;                        // the pose given for the scan when it was processed
+  Matrix3 covariance = Matrix3::Zero();  // ScanResult::pose_covariance of it
+  Pose2 odometry;      // odom → base_link at the scan (scan-matched when scan matching is on)
+  int iteration = -1;  // number of the iteration this pose hangs off (0: the run's first)
+  Pose2 odometry_at_iteration;  // the odometry at that iteration
+  // The causal estimate given for the scan when it was processed: with loop
+  // closure on, the back end's loop-closed graph as it stood after this
+  // scan (corrections take effect at the scan whose key scan produced
+  // them), in the map frame; otherwise the filtered pose.
+  Pose2 causal;
+};
+
+class ScanHistory {
+ public:
+  // `bound`: history_scans. The full smoother's first pose is `prior`.
+  ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance);
+
+  // The prediction of an iteration (for the RTS smoother) …
+  void addTransition(const Matrix3& F, const Pose2& predicted, const Matrix3& predicted_cov) {
+    recorder_.addTransition(F, predicted, predicted_cov);
+  }
+  // … and the iteration itself, after its updates (see
+  // FullSmootherRecorder::addIteration).
+  void addIteration(double stamp, const EkfSlam& filter, const OdometryControl* control,
+                    const std::vector<PointObservation>& observations,
+                    const IterationReport& report, const Pose2* local_motion, const Pose2* wheels);
+  // Number of the newest iteration (counting from the run's first; −1
+  // before the first).
+  int currentIteration() const {
+    return first_iteration_ + static_cast<int>(recorder_.steps().size()) - 1;
+  }
+  // Appends a scan's record, then trims to the bound. Returns the number of
+  // records dropped from the front (0 almost always).
+  long add(const ScanRecord& record);
+
+  // Records of scans firstScan() to recordedScans() − 1, and the
+  // iterations from firstIteration() on.
+  const std::vector<ScanRecord>& records() const { return records_; }
+  long firstScan() const { return first_record_; }
+  long recordedScans() const { return first_record_ + static_cast<long>(records_.size()); }
+  // The record of scan `scan` (counting from the run's first), or null when
+  // it is not kept.
+  const ScanRecord* record(long scan) const;
+  int firstIteration() const { return first_iteration_; }
+  const TrajectoryRecorder& iterations() const { return recorder_; }
+  const FullSmootherRecorder& smootherRecord() const { return full_recorder_; }
+
+  // One pose per kept scan from one pose per kept iteration (scans between
+  // iterations follow their odometry from their iteration); a scan whose
+  // iteration has no pose keeps its filtered one.
+  std::vector<StampedPose> scanPosesFrom(const std::vector<Pose2>& iteration_poses) const;
+  std::vector<StampedPose> filteredScanPoses() const;
+  std::vector<StampedPose> causalScanPoses() const;
+  // The thesis's RTS smoother over the pose alone (§3.4.5.1).
+  std::vector<StampedPose> rtsScanPoses() const;
+
+ private:
+  long bound_;
+  std::vector<ScanRecord> records_;  // scans first_record_ on
+  long first_record_ = 0;
+  int first_iteration_ = 0;  // iteration number of recorder_'s and full_recorder_'s first
+  TrajectoryRecorder recorder_;
+  FullSmootherRecorder full_recorder_;
+};
+
+}  // namespace ekf_slam
