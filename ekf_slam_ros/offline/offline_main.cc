@@ -34,6 +34,7 @@
 #include <malloc.h>
 #endif
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -43,6 +44,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/io/trajectory_file.h"
@@ -265,40 +267,44 @@ std::string wheelEdgesLine(const ekf_slam::WheelNoise& wheels) {
   return line.str();
 }
 
-}  // namespace
 
-int main(int argc, char** argv) {
+// The command line.
+struct Arguments {
   std::string bag_path, carmen_path, out_dir, config_path, export_dir;
   long max_scans = -1;
   bool figures = true;
   bool maps = true;
   bool trace = false;
   bool print_config = false;
+};
+
+// Returns -1 to go on, else the exit code.
+int parseArguments(int argc, char** argv, Arguments* a) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     // roslaunch appends __name:=… and __log:=…; remappings mean nothing here.
     if (arg.rfind("__", 0) == 0 && arg.find(":=") != std::string::npos) continue;
     if (arg == "--bag" && i + 1 < argc) {
-      bag_path = argv[++i];
+      a->bag_path = argv[++i];
     } else if (arg == "--carmen" && i + 1 < argc) {
-      carmen_path = argv[++i];
+      a->carmen_path = argv[++i];
     } else if (arg == "--out" && i + 1 < argc) {
-      out_dir = argv[++i];
+      a->out_dir = argv[++i];
     } else if (arg == "--config" && i + 1 < argc) {
-      config_path = argv[++i];
+      a->config_path = argv[++i];
     } else if (arg == "--max-scans" && i + 1 < argc) {
-      max_scans = std::atol(argv[++i]);
+      a->max_scans = std::atol(argv[++i]);
     } else if (arg == "--no-figures") {
-      figures = false;
+      a->figures = false;
     } else if (arg == "--no-maps") {
-      maps = false;
-      figures = false;  // the figures draw the maps
+      a->maps = false;
+      a->figures = false;  // the figures draw the maps
     } else if (arg == "--trace") {
-      trace = true;
+      a->trace = true;
     } else if (arg == "--export-graphs" && i + 1 < argc) {
-      export_dir = argv[++i];
+      a->export_dir = argv[++i];
     } else if (arg == "--print-config") {
-      print_config = true;
+      a->print_config = true;
     } else if (arg == "--help" || arg == "-h") {
       usage(std::cout);
       return 0;
@@ -307,202 +313,196 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  if (!print_config && (out_dir.empty() || bag_path.empty() == carmen_path.empty())) {
+  if (!a->print_config && (a->out_dir.empty() || a->bag_path.empty() == a->carmen_path.empty())) {
     usage();
     return 1;
   }
+  return -1;
+}
 
-  ekf_slam::SlamConfig config;
-  if (!config_path.empty()) {
-    const std::string error = ekf_slam::loadSlamConfigFile(config_path, &config);
-    if (!error.empty()) {
-      std::cerr << "ekf_slam_offline: bad configuration " << config_path << ":\n" << error << "\n";
-      return 1;
-    }
-  }
-  if (print_config) {
-    std::cout << ekf_slam::describeSlamConfig(config);
-    return 0;
-  }
-
-  // Whatever happens below, a report from an earlier run must not make this
-  // directory look complete: report.txt is removed first and written last.
-  ::unlink((out_dir + "/report.txt").c_str());
-
-  const auto wall_start = std::chrono::steady_clock::now();
-  ekf_slam::LogData log;
-  const std::string input_error = bag_path.empty()
-                                      ? ekf_slam::readCarmen(carmen_path, &log)
-                                      : ekf_slam::readBag(bag_path, config.input, &log);
+// The log, cut to --max-scans, and the laser mount from it unless the
+// configuration gives one. Returns -1 to go on, else the exit code.
+int readInput(const Arguments& a, ekf_slam::SlamConfig* config, ekf_slam::LogData* log) {
+  const std::string input_error = a.bag_path.empty()
+                                      ? ekf_slam::readCarmen(a.carmen_path, log)
+                                      : ekf_slam::readBag(a.bag_path, config->input, log);
   if (!input_error.empty()) {
     std::cerr << "ekf_slam_offline: " << input_error << "\n";
     return 2;
   }
-  if (log.unusable_scans > 0) {
-    std::cerr << "ekf_slam_offline: warning: " << log.unusable_scans
+  if (log->unusable_scans > 0) {
+    std::cerr << "ekf_slam_offline: warning: " << log->unusable_scans
               << " scans left out: their stamp or odometry is not finite (the first: "
-              << log.first_unusable << ")\n";
+              << log->first_unusable << ")\n";
   }
-  if (max_scans >= 0 && static_cast<size_t>(max_scans) < log.scans.size()) {
-    log.scans.resize(max_scans);
-    log.last_stamp = log.first_stamp;
-    for (const auto& s : log.scans) log.last_stamp = std::max(log.last_stamp, s.scan.stamp);
+  if (a.max_scans >= 0 && static_cast<size_t>(a.max_scans) < log->scans.size()) {
+    log->scans.resize(a.max_scans);
+    log->last_stamp = log->first_stamp;
+    for (const auto& s : log->scans) log->last_stamp = std::max(log->last_stamp, s.scan.stamp);
   }
-  if (!config.laser_pose_given) {
-    if (!log.laser_pose_found) {
-      std::cerr << "ekf_slam_offline: warning: no " << config.input.base_frame << " -> "
-                << log.laser_frame
+  if (!config->laser_pose_given) {
+    if (!log->laser_pose_found) {
+      std::cerr << "ekf_slam_offline: warning: no " << config->input.base_frame << " -> "
+                << log->laser_frame
                 << " transform in the log and none in the configuration (filter.laser_pose): "
                    "assuming the laser at base_link\n";
     }
-    config.pipeline.filter.laser_pose = log.laser_pose;
+    config->pipeline.filter.laser_pose = log->laser_pose;
   }
-  if (::mkdir(out_dir.c_str(), 0755) != 0 && errno != EEXIST) {
-    std::cerr << "ekf_slam_offline: cannot create " << out_dir << "\n";
-    return 3;
-  }
+  return -1;
+}
 
-  ekf_slam::SlamPipeline pipeline(config.pipeline);
+// --trace: every observation's association, for finding the scan where an
+// estimate goes wrong (the live node publishes the same as `association`).
+void openTrace(const std::string& path, std::ofstream* trace) {
+  trace->open(path);
+  *trace << "# stamp  x y theta (filtered, after the scan)  range bearing  decision  "
+            "landmark_id  d2 (Mahalanobis squared of the match or the best candidate)  "
+            "kind (corner / front_edge)  var_range var_range_bearing var_bearing (m^2, m rad, "
+            "rad^2)\n";
+  trace->precision(9);
+}
+
+void traceScan(double stamp, const ekf_slam::ScanResult& result, std::ofstream* trace) {
+  const auto& decisions = result.iteration.association.observations;
+  for (size_t k = 0; k < result.observations.size() && k < decisions.size(); ++k) {
+    const ekf_slam::Matrix2& c = result.observations[k].covariance;
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6f", stamp);
+    *trace << text << ' ' << result.pose.x << ' ' << result.pose.y << ' ' << result.pose.theta
+           << ' ' << result.observations[k].z.range << ' ' << result.observations[k].z.bearing
+           << ' ' << ekf_slam::toString(decisions[k].decision) << ' ' << decisions[k].landmark_id
+           << ' ' << decisions[k].mahalanobis2 << ' '
+           << (result.features.points_of_interest[result.observation_feature[k]].kind ==
+                       ekf_slam::PointKind::kCorner
+                   ? "corner"
+                   : "front_edge")
+           << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(1, 1) << '\n';
+  }
+}
+
+// Every scan through the pipeline in file order, then the back end's final
+// optimisation.
+void runSlam(const Arguments& a, const ekf_slam::LogData& log,
+             std::chrono::steady_clock::time_point wall_start, ekf_slam::SlamPipeline* pipeline) {
   const bool tty = ::isatty(STDERR_FILENO);
   const size_t total = log.scans.size();
   size_t next_report = 0;
-  // --trace: every observation's association, for finding the scan where an
-  // estimate goes wrong (the live node publishes the same as `association`).
-  std::ofstream trace_file;
-  if (trace) {
-    trace_file.open(out_dir + "/association_trace.txt");
-    trace_file
-        << "# stamp  x y theta (filtered, after the scan)  range bearing  decision  "
-           "landmark_id  d2 (Mahalanobis squared of the match or the best candidate)  "
-           "kind (corner / front_edge)  var_range var_range_bearing var_bearing (m^2, m rad, "
-           "rad^2)\n";
-    trace_file.precision(9);
-  }
+  std::ofstream trace;
+  if (a.trace) openTrace(a.out_dir + "/association_trace.txt", &trace);
   for (size_t i = 0; i < total; ++i) {
     const ekf_slam::ScanResult result =
-        pipeline.processScan(log.scans[i].scan, log.scans[i].odometry);
-    if (trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
-      const auto& decisions = result.iteration.association.observations;
-      for (size_t k = 0; k < result.observations.size() && k < decisions.size(); ++k) {
-        const ekf_slam::Matrix2& c = result.observations[k].covariance;
-        char stamp[32];
-        std::snprintf(stamp, sizeof(stamp), "%.6f", log.scans[i].scan.stamp);
-        trace_file << stamp << ' ' << result.pose.x << ' ' << result.pose.y << ' '
-                   << result.pose.theta << ' ' << result.observations[k].z.range << ' '
-                   << result.observations[k].z.bearing << ' '
-                   << ekf_slam::toString(decisions[k].decision) << ' ' << decisions[k].landmark_id
-                   << ' ' << decisions[k].mahalanobis2 << ' '
-                   << (result.features.points_of_interest[result.observation_feature[k]].kind ==
-                               ekf_slam::PointKind::kCorner
-                           ? "corner"
-                           : "front_edge")
-                   << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(1, 1) << '\n';
-      }
+        pipeline->processScan(log.scans[i].scan, log.scans[i].odometry);
+    if (a.trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
+      traceScan(log.scans[i].scan.stamp, result, &trace);
     }
     if (i + 1 >= next_report || i + 1 == total) {
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      progress(i + 1, total, pipeline.filter().landmarkCount(), seconds, tty);
+      progress(i + 1, total, pipeline->filter().landmarkCount(), seconds, tty);
       next_report += std::max<size_t>(1, total / (tty ? 200 : 10));
     }
   }
   if (tty) std::fprintf(stderr, "\n");
-  pipeline.finishLoopClosure();
+  pipeline->finishLoopClosure();
+}
 
-  // Trajectories, one line per scan with its header stamp.
-  const std::vector<ekf_slam::StampedPose> filtered = pipeline.filteredScanPoses();
-  const auto smoothing_start = std::chrono::steady_clock::now();
+// The trajectories of a run, one pose per scan with its header stamp.
+struct Trajectories {
+  std::vector<ekf_slam::StampedPose> filtered, smoothed, rts, odometry, optimized;
   ekf_slam::FullSmootherResult smoother;
-  ekf_slam::LandmarkGraph smoother_problem;
-  const std::vector<ekf_slam::StampedPose> smoothed =
-      pipeline.smoothedScanPoses(&smoother, export_dir.empty() ? nullptr : &smoother_problem);
-  const double smoothing_seconds =
+  ekf_slam::LandmarkGraph smoother_problem;  // with --export-graphs
+  double smoothing_seconds = 0.0;
+  // The final trajectory: loop-closed when loop closure is on, else smoothed.
+  const std::vector<ekf_slam::StampedPose>& final() const {
+    return optimized.empty() ? smoothed : optimized;
+  }
+};
+
+void smooth(const Arguments& a, const ekf_slam::LogData& log,
+            const ekf_slam::SlamPipeline& pipeline, Trajectories* t) {
+  t->filtered = pipeline.filteredScanPoses();
+  const auto smoothing_start = std::chrono::steady_clock::now();
+  t->smoothed = pipeline.smoothedScanPoses(&t->smoother,
+                                           a.export_dir.empty() ? nullptr : &t->smoother_problem);
+  t->smoothing_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - smoothing_start).count();
-  const std::vector<ekf_slam::StampedPose> rts = pipeline.rtsScanPoses();
-  std::vector<ekf_slam::StampedPose> odometry;
-  for (const auto& s : log.scans) odometry.push_back({s.scan.stamp, s.odometry});
-  std::string error = ekf_slam::writeTrajectory(out_dir + "/trajectory_filtered.txt", filtered);
-  if (error.empty())
-    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_smoothed.txt", smoothed);
+  t->rts = pipeline.rtsScanPoses();
+  for (const auto& s : log.scans) t->odometry.push_back({s.scan.stamp, s.odometry});
+  t->optimized = pipeline.optimizedScanPoses();
+}
+
+// The trajectory files, the filter's covariances, the landmark map and the
+// first and last scans; empty on success, else what failed.
+std::string writeResults(const std::string& dir, const ekf_slam::SlamConfig& config,
+                         const ekf_slam::LogData& log, const ekf_slam::SlamPipeline& pipeline,
+                         const Trajectories& t) {
+  std::string error = ekf_slam::writeTrajectory(dir + "/trajectory_filtered.txt", t.filtered);
+  if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_smoothed.txt", t.smoothed);
   // What a live run publishes for each scan at that scan's time.
   if (error.empty()) {
-    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_live.txt", pipeline.causalScanPoses());
+    error = ekf_slam::writeTrajectory(dir + "/trajectory_live.txt", pipeline.causalScanPoses());
   }
-  if (error.empty()) error = ekf_slam::writeTrajectory(out_dir + "/trajectory_rts.txt", rts);
-  if (error.empty())
-    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_odometry.txt", odometry);
-  if (error.empty()) {
-    error = writeFilteredCovariances(out_dir + "/covariance_filtered.txt", pipeline);
-  }
+  if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_rts.txt", t.rts);
+  if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_odometry.txt", t.odometry);
+  if (error.empty()) error = writeFilteredCovariances(dir + "/covariance_filtered.txt", pipeline);
   if (error.empty() && config.pipeline.scan_matching.enabled) {
     // The control source alone (scan-matched odometry, before the filter).
     std::vector<ekf_slam::StampedPose> matched;
     for (const ekf_slam::ScanRecord& r : pipeline.scans()) matched.push_back({r.stamp, r.odometry});
-    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_scan_matched.txt", matched);
+    error = ekf_slam::writeTrajectory(dir + "/trajectory_scan_matched.txt", matched);
   }
   // The loop-closed trajectory (pose graph over key scans), when on.
-  const std::vector<ekf_slam::StampedPose> optimized = pipeline.optimizedScanPoses();
-  if (error.empty() && !optimized.empty()) {
-    error = ekf_slam::writeTrajectory(out_dir + "/trajectory_optimized.txt", optimized);
+  if (error.empty() && !t.optimized.empty()) {
+    error = ekf_slam::writeTrajectory(dir + "/trajectory_optimized.txt", t.optimized);
   }
-  // The final trajectory: loop-closed when loop closure is on, else smoothed.
-  const std::vector<ekf_slam::StampedPose>& final_poses = optimized.empty() ? smoothed : optimized;
   if (error.empty()) {
     // The same file as the live node's save_map, line extents and
     // endpoints included.
     error = ekf_slam::writeLandmarkMap(
-        out_dir + "/landmarks.yaml",
+        dir + "/landmarks.yaml",
         ekf_slam::toLandmarkMapFile(pipeline.filter(), pipeline.lineSupport(), "map"));
   }
   if (error.empty()) {
-    error = writeFirstLastScans(out_dir + "/first_last_scans.txt", log, odometry, final_poses,
+    error = writeFirstLastScans(dir + "/first_last_scans.txt", log, t.odometry, t.final(),
                                 config.pipeline.filter.laser_pose);
   }
+  return error;
+}
+
+// The occupancy grids from the final, the filtered and the odometry
+// trajectories.
+std::string writeMaps(const std::string& dir, const ekf_slam::SlamConfig& config,
+                      const ekf_slam::LogData& log, const Trajectories& t) {
   const Pose2 laser = config.pipeline.filter.laser_pose;
 #ifdef __GLIBC__
   // The loop verification's grids and the smoother's matrices are freed by
   // now, but glibc keeps their pages in the heap, beneath the occupancy
   // grids about to be built: hand them back first (hospital log: peak
   // 306 → 295 MiB).
-  if (maps) malloc_trim(0);
+  malloc_trim(0);
 #endif
-  if (maps && error.empty()) {
-    error = buildMap(config.map, log, final_poses, laser).save(out_dir + "/map");
-  }
-  if (maps && error.empty()) {
-    error = buildMap(config.map, log, filtered, laser).save(out_dir + "/map_filtered");
-  }
-  if (maps && error.empty()) {
-    error = buildMap(config.map, log, odometry, laser).save(out_dir + "/map_odometry");
-  }
-  if (error.empty() && !export_dir.empty()) {
-    error = exportGraphs(export_dir, pipeline, config.pipeline, smoother_problem);
-  }
-  if (!error.empty()) {
-    std::cerr << "ekf_slam_offline: " << error << "\n";
-    return 3;
-  }
-  // Everything but the figures (drawn by a Python script in a child process).
-  const double processing =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  if (figures) {
-    const std::string script = programDir() + "/plot_offline.py";
-    const std::string command = "/usr/bin/python3 '" + script + "' '" + out_dir + "'";
-    if (::access(script.c_str(), R_OK) != 0 || std::system(command.c_str()) != 0) {
-      std::cerr << "ekf_slam_offline: warning: figures not drawn (" << script << ")\n";
-    }
-  }
+  std::string error = buildMap(config.map, log, t.final(), laser).save(dir + "/map");
+  if (error.empty()) error = buildMap(config.map, log, t.filtered, laser).save(dir + "/map_filtered");
+  if (error.empty()) error = buildMap(config.map, log, t.odometry, laser).save(dir + "/map_odometry");
+  return error;
+}
 
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  rusage usage{};
-  ::getrusage(RUSAGE_SELF, &usage);
-  const ekf_slam::PipelineCounters& c = pipeline.counters();
-  std::ostringstream report;
-  report.setf(std::ios::fixed);
-  report.precision(3);
-  report << "input: " << (bag_path.empty() ? carmen_path : bag_path) << "\n"
-         << "scans: " << total << " (" << log.scans_out_of_time_order
+// The figures, drawn by a Python script in a child process.
+void drawFigures(const std::string& dir) {
+  const std::string script = programDir() + "/plot_offline.py";
+  const std::string command = "/usr/bin/python3 '" + script + "' '" + dir + "'";
+  if (::access(script.c_str(), R_OK) != 0 || std::system(command.c_str()) != 0) {
+    std::cerr << "ekf_slam_offline: warning: figures not drawn (" << script << ")\n";
+  }
+}
+
+// report.txt, section by section.
+void reportInput(const Arguments& a, const ekf_slam::SlamConfig& config,
+                 const ekf_slam::LogData& log, std::ostream& report) {
+  const Pose2 laser = config.pipeline.filter.laser_pose;
+  report << "input: " << (a.bag_path.empty() ? a.carmen_path : a.bag_path) << "\n"
+         << "scans: " << log.scans.size() << " (" << log.scans_out_of_time_order
          << " with a stamp not after the previous one)\n"
          << "scans left out (stamp not finite, odometry not finite or beyond 1e6 m): "
          << log.unusable_scans
@@ -514,8 +514,13 @@ int main(int argc, char** argv) {
          << (config.laser_pose_given ? " (configuration)"
              : log.laser_pose_found  ? " (log)"
                                      : " (assumed)")
-         << "\n"
-         << "iterations: " << c.iterations << ", skipped (no motion): " << c.skipped_no_motion
+         << "\n";
+}
+
+void reportFrontAndBackEnd(const ekf_slam::SlamConfig& config,
+                           const ekf_slam::SlamPipeline& pipeline, std::ostream& report) {
+  const ekf_slam::PipelineCounters c = pipeline.counters();
+  report << "iterations: " << c.iterations << ", skipped (no motion): " << c.skipped_no_motion
          << ", skipped (time not increasing): " << c.time_not_increasing
          << ", odometry jumps: " << c.odometry_jumps << ", bad input: " << c.bad_input
          << ", update failures: " << c.update_failures << "\n"
@@ -537,8 +542,14 @@ int main(int argc, char** argv) {
                        ")\n"
                  : std::string())
          << "loop closure: " << loopClosureLine(pipeline.loopCloser())
-         << "; the filter re-anchored " << c.reanchors << " times\n"
-         << "observations (landmark candidates): " << c.observations << " ("
+         << "; the filter re-anchored " << c.reanchors << " times\n";
+}
+
+void reportLandmarks(const ekf_slam::SlamConfig& config, const ekf_slam::SlamPipeline& pipeline,
+                     std::ostream& report) {
+  const ekf_slam::PipelineCounters c = pipeline.counters();
+  const ekf_slam::LandmarkSet set = config.pipeline.landmarks;
+  report << "observations (landmark candidates): " << c.observations << " ("
          << (c.iterations ? static_cast<double>(c.observations) / c.iterations : 0.0)
          << " per iteration), matched: " << c.matches << ", ambiguous: " << c.ambiguous
          << ", new: " << c.new_landmarks << "\n"
@@ -546,9 +557,8 @@ int main(int argc, char** argv) {
          << " created, " << c.pruned << " pruned as seen once, " << c.pruned_rare
          << " as seen rarely, " << c.marginalised << " marginalised by max_landmarks)"
          << ", average NIS: " << (c.matches ? c.nis_sum / c.matches : 0.0) << " (expected 2)\n"
-         << "line landmarks (" << ekf_slam::toString(config.pipeline.landmarks) << "): "
-         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPoints ||
-                     config.pipeline.landmarks == ekf_slam::LandmarkSet::kPointsAndMecp
+         << "line landmarks (" << ekf_slam::toString(set) << "): "
+         << (set == ekf_slam::LandmarkSet::kPoints || set == ekf_slam::LandmarkSet::kPointsAndMecp
                  ? std::string("none")
                  : std::to_string(c.line_observations) +
                        " segments offered, matched: " + std::to_string(c.line_matches) + " (" +
@@ -562,7 +572,7 @@ int main(int argc, char** argv) {
                        ", in the map: " + std::to_string(pipeline.lineSupport().size()))
          << "\n"
          << "MECP updates (points+mecp): "
-         << (config.pipeline.landmarks == ekf_slam::LandmarkSet::kPointsAndMecp
+         << (set == ekf_slam::LandmarkSet::kPointsAndMecp
                  ? std::to_string(c.mecp_updates) + " applied, " +
                        std::to_string(c.mecp_without_polygon) +
                        " scans without a polygon around the robot, " +
@@ -576,8 +586,12 @@ int main(int argc, char** argv) {
                        " without a usable map), last: " + std::to_string(c.rooms) + " rooms, " +
                        std::to_string(c.doorways) + " doorways"
                  : std::string("off"))
-         << "\n"
-         << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
+         << "\n";
+}
+
+void reportSmoother(const Trajectories& t, std::ostream& report) {
+  const ekf_slam::FullSmootherResult& smoother = t.smoother;
+  report << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
          << (smoother.reassociated
                  ? "sightings re-associated, " + std::to_string(smoother.ambiguous_sightings) +
@@ -588,15 +602,80 @@ int main(int argc, char** argv) {
          << smoother.detached_visits << " revisits detached; " << smoother.summary.iterations
          << " iterations (" << (smoother.summary.converged ? "converged" : "not converged")
          << "), cost " << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost
-         << ", " << smoothing_seconds << " s\n"
-         << "wheel edges: " << wheelEdgesLine(smoother.wheels) << "\n"
-         << "wall-clock: " << wall
+         << ", " << t.smoothing_seconds << " s\n"
+         << "wheel edges: " << wheelEdgesLine(smoother.wheels) << "\n";
+}
+
+void reportTimes(const ekf_slam::LogData& log, double wall, double processing,
+                 std::ostream& report) {
+  rusage usage{};
+  ::getrusage(RUSAGE_SELF, &usage);
+  report << "wall-clock: " << wall
          << " s, real-time factor: " << (wall > 0 ? log.duration() / wall : 0.0)
          << "x, peak memory: " << usage.ru_maxrss / 1024.0 << " MiB\n"
          << "processing: " << processing
          << " s (reading, scan matching, SLAM, smoothing, trajectories and maps; the figures "
             "excluded)\n";
-  std::ofstream(out_dir + "/report.txt") << report.str();
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments args;
+  if (const int exit_code = parseArguments(argc, argv, &args); exit_code >= 0) return exit_code;
+  ekf_slam::SlamConfig config;
+  if (!args.config_path.empty()) {
+    const std::string error = ekf_slam::loadSlamConfigFile(args.config_path, &config);
+    if (!error.empty()) {
+      std::cerr << "ekf_slam_offline: bad configuration " << args.config_path << ":\n"
+                << error << "\n";
+      return 1;
+    }
+  }
+  if (args.print_config) {
+    std::cout << ekf_slam::describeSlamConfig(config);
+    return 0;
+  }
+  // Whatever happens below, a report from an earlier run must not make this
+  // directory look complete: report.txt is removed first and written last.
+  ::unlink((args.out_dir + "/report.txt").c_str());
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  ekf_slam::LogData log;
+  if (const int exit_code = readInput(args, &config, &log); exit_code >= 0) return exit_code;
+  if (::mkdir(args.out_dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    std::cerr << "ekf_slam_offline: cannot create " << args.out_dir << "\n";
+    return 3;
+  }
+  ekf_slam::SlamPipeline pipeline(config.pipeline);
+  runSlam(args, log, wall_start, &pipeline);
+  Trajectories trajectories;
+  smooth(args, log, pipeline, &trajectories);
+  std::string error = writeResults(args.out_dir, config, log, pipeline, trajectories);
+  if (args.maps && error.empty()) error = writeMaps(args.out_dir, config, log, trajectories);
+  if (error.empty() && !args.export_dir.empty()) {
+    error = exportGraphs(args.export_dir, pipeline, config.pipeline, trajectories.smoother_problem);
+  }
+  if (!error.empty()) {
+    std::cerr << "ekf_slam_offline: " << error << "\n";
+    return 3;
+  }
+  const double processing = secondsSince(wall_start);
+  if (args.figures) drawFigures(args.out_dir);
+
+  std::ostringstream report;
+  report.setf(std::ios::fixed);
+  report.precision(3);
+  reportInput(args, config, log, report);
+  reportFrontAndBackEnd(config, pipeline, report);
+  reportLandmarks(config, pipeline, report);
+  reportSmoother(trajectories, report);
+  reportTimes(log, secondsSince(wall_start), processing, report);
+  std::ofstream(args.out_dir + "/report.txt") << report.str();
   std::cout << report.str();
   return 0;
 }
