@@ -65,7 +65,7 @@ class OfficeLoop(unittest.TestCase):
         self.assertGreater(r["odometry_mean_position_error"], 2.0 * r["mean_position_error"])
         # One run's pose NEES is a weak test: its errors are correlated over
         # the whole loop (3-50 independent samples), so single runs scatter
-        # from 0.6 to 15 over the seeds measured (docs/results.md). Consistency
+        # widely over the seeds measured (docs/results.md). Consistency
         # is judged over seeds (tools/dev/office_monte_carlo.sh, docs/results.md
         # "The pose NEES"); here only a regression guard.
         self.assertLess(r["nees_average"], 10.0)

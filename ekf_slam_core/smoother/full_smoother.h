@@ -80,7 +80,7 @@ struct FullSmootherOptions {
   RobustKernel wheel_kernel = RobustKernel::kCauchy;
   // Kernel on observation edges: a wrong association (a corner matched to
   // its neighbour) is down-weighted instead of bending the trajectory.
-  // Cauchy beat Huber and no kernel on every simulated bag (docs/offline.md).
+  // Cauchy beat Huber and no kernel on every simulated bag.
   RobustKernel observation_kernel = RobustKernel::kCauchy;
   // Loop-closure edges (Cauchy, as in the back end).
   RobustKernel loop_kernel = RobustKernel::kCauchy;
@@ -89,10 +89,8 @@ struct FullSmootherOptions {
   // steps (the verification rounds' solves stop earlier, below): far
   // below the cost's own spread (√(2·dof), about 0.5 % of it on Intel), and
   // the logs' trajectories equal those at 10⁻⁶ to 0.1 mm in 45 % of the
-  // steps (docs/offline.md). With the re-association below, the
-  // answer no longer depends on the cap (Intel 0.0322 / 0.0320 / 0.0321 m
-  // after 30 / converged at 10⁻⁶ / 300 steps per solve, docs/offline.md);
-  // before it, more steps slid the estimate along a flat valley that the
+  // steps (docs/offline.md, "Solve tolerances"). With the re-association
+  // below, the answer no longer depends on the cap; before it, more steps slid the estimate along a flat valley that the
   // filter's wrong associations shaped, and an early stop was needed.
   LandmarkGraphOptions optimizer = defaultOptimizer();
   static LandmarkGraphOptions defaultOptimizer() {

@@ -207,7 +207,7 @@ TEST(FullSmoother, LooseVerificationSolvesEndAtTheFullySolvedOptimum) {
   // few millimetres that the tolerance leaves along the cost's flat
   // directions (the first step alone ends 7 cm away, below). These small
   // problems converge in a few steps either way; the steps saved on the
-  // real logs are in docs/offline.md.
+  // real logs are in docs/results.md.
   for (unsigned seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
     FullSmootherOptions tight, loose;
     tight.reassociate = loose.reassociate = false;  // the filter's associations, to verify

@@ -13,7 +13,7 @@
 // trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's
 // header stamp with 6 decimals), covariance_filtered.txt (the filter's pose
 // covariance per scan, for NEES checks), landmarks.yaml, map.pgm + map.yaml (from the
-// smoothed trajectory), map_filtered.*, map_odometry.*, the figures and
+// final trajectory: loop-closed with loop closure on, else smoothed), map_filtered.*, map_odometry.*, the figures and
 // report.txt. report.txt is written last: a directory without it holds no
 // complete result. --export-graphs DIR also writes, into DIR, the problems of
 // the last two optimisations (ekf_slam_core/pose_graph/graph_io.h gives the

@@ -10,7 +10,7 @@
 // does not move while it is told to (the safety gate holding it at an
 // obstacle) backs off and tries again, and gives up after max_backoffs
 // tries (BlockageRecovery in pure_pursuit.h); ~done then stays false.
-// Parameters: config/waypoints/README in docs/simulation.md.
+// Parameters: docs/simulation.md, "`waypoint_driver`".
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Path.h>
