@@ -8,8 +8,8 @@
 #include <string>
 
 #include "ekf_slam_core/features/extract_features.h"
-#include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/filter/data_association.h"
+#include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/mecp/room_gating.h"

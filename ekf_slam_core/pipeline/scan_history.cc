@@ -9,8 +9,7 @@ ScanHistory::ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_co
   full_recorder_.setPrior(prior, prior_covariance);
 }
 
-void ScanHistory::addIteration(double stamp, const EkfSlam& filter,
-                               const OdometryControl* control,
+void ScanHistory::addIteration(double stamp, const EkfSlam& filter, const OdometryControl* control,
                                const std::vector<PointObservation>& observations,
                                const IterationReport& report, const Pose2* local_motion,
                                const Pose2* wheels) {

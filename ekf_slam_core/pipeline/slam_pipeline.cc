@@ -167,8 +167,7 @@ bool SlamPipeline::predict(double stamp, const Pose2& odometry, double dt, ScanR
 }
 
 void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* features,
-                           const Pose2& odometry, bool predict_first, double dt,
-                           ScanResult* out) {
+                           const Pose2& odometry, bool predict_first, double dt, ScanResult* out) {
   const OdometryControl control = controlFromOdometry(last_odometry_, odometry);
   if (predict_first) {
     if (!predict(stamp, odometry, dt, out)) return;
@@ -187,8 +186,8 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   out->features = scan != nullptr ? extractFeatures(*scan, options_.features) : *features;
   filter_.update(out);
   history_.addIteration(stamp, filter_.filter(), predict_first ? &control : nullptr,
-                        out->observations, out->iteration,
-                        local_motion ? &*local_motion : nullptr, wheels_usable ? &wheels : nullptr);
+                        out->observations, out->iteration, local_motion ? &*local_motion : nullptr,
+                        wheels_usable ? &wheels : nullptr);
   ++counters_.iterations;
   filter_.maintain(*out);
   out->outcome = ScanOutcome::kIterated;

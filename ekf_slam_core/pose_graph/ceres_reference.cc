@@ -107,7 +107,8 @@ PoseGraphSummary solveWithCeres(const PoseGraphOptions& options, PoseGraph* grap
     return summary;
   }
   std::vector<std::array<double, 3>> x(start_poses.size());
-  for (size_t i = 0; i < start_poses.size(); ++i) x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
+  for (size_t i = 0; i < start_poses.size(); ++i)
+    x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
   ceres_costs::Kernels kernels(options.robust_kernel_width);
   ceres::Problem problem(problemOptions());
   ceres_costs::addPoseGraph(*graph, &kernels, &x, &problem);
@@ -135,8 +136,10 @@ LandmarkGraphSummary solveWithCeres(const LandmarkGraphOptions& options, Landmar
   const std::vector<Vector2>& start_landmarks = graph->landmarks();
   std::vector<std::array<double, 3>> x(start_poses.size());
   std::vector<std::array<double, 2>> m(start_landmarks.size());
-  for (size_t i = 0; i < start_poses.size(); ++i) x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
-  for (size_t j = 0; j < start_landmarks.size(); ++j) m[j] = {start_landmarks[j].x(), start_landmarks[j].y()};
+  for (size_t i = 0; i < start_poses.size(); ++i)
+    x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
+  for (size_t j = 0; j < start_landmarks.size(); ++j)
+    m[j] = {start_landmarks[j].x(), start_landmarks[j].y()};
   ceres_costs::Kernels kernels(options.kernel_width);
   ceres::Problem problem(problemOptions());
   ceres_costs::addLandmarkGraph(*graph, &kernels, &x, &m, &problem);

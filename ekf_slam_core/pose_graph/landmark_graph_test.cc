@@ -291,7 +291,8 @@ TEST(LandmarkGraph, CeresReachesTheSameOptimum) {
   for (const bool ceres : {false, true}) {
     solved.push_back(buildGraph(p.truth, p.motion, noisy, p.poses, start));
     LandmarkGraph& graph = solved.back();
-    EXPECT_TRUE(ceres ? solveWithCeres(options, &graph).converged : graph.optimize(options).converged)
+    EXPECT_TRUE(ceres ? solveWithCeres(options, &graph).converged
+                      : graph.optimize(options).converged)
         << (ceres ? "ceres" : "hand-written");
   }
   EXPECT_NEAR(solved[0].cost(3.0), solved[1].cost(3.0), 1e-6 * solved[0].cost(3.0));

@@ -112,7 +112,9 @@ Outcome solvePoseGraphByHand(const PoseGraph& problem, const PoseGraphOptions& o
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
-    best.termination = summary.converged ? "converged" : summary.stalled ? "stalled" : "iteration limit";
+    best.termination = summary.converged ? "converged"
+                       : summary.stalled ? "stalled"
+                                         : "iteration limit";
     best.poses = graph.poses();
   }
   best.cost = poseGraphCost(problem, best.poses, options.robust_kernel_width);
@@ -172,7 +174,9 @@ Outcome solveLandmarkGraphByHand(const LandmarkGraph& problem, const LandmarkGra
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
-    best.termination = summary.converged ? "converged" : summary.stalled ? "stalled" : "iteration limit";
+    best.termination = summary.converged ? "converged"
+                       : summary.stalled ? "stalled"
+                                         : "iteration limit";
     best.poses = graph.poses();
     best.landmarks = graph.landmarks();
   }

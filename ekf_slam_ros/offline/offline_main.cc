@@ -13,20 +13,17 @@
 // trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's
 // header stamp with 6 decimals), covariance_filtered.txt (the filter's pose
 // covariance per scan, for NEES checks), landmarks.yaml, map.pgm + map.yaml (from the
-// final trajectory: loop-closed with loop closure on, else smoothed), map_filtered.*, map_odometry.*, the figures and
-// report.txt. report.txt is written last: a directory without it holds no
-// complete result. --export-graphs DIR also writes, into DIR, the problems of
-// the last two optimisations (ekf_slam_core/pose_graph/graph_io.h gives the
-// formats), to be solved again by other solvers (docs/solvers.md):
-// pose_graph.txt, the loop-closure pose graph as the back end's final
-// optimisation started from (when a loop was closed), pose_graph_cold.txt,
-// the same graph started from the front end's key-scan poses, and
-// landmark_graph.txt, the full smoother's last optimisation as it started;
-// with pose_graph_scans.txt and landmark_graph_scans.txt, the scan anchors
-// that turn a solution into one pose per scan (as trajectory_optimized.txt
-// and trajectory_smoothed.txt are made from the run's own solutions).
-// Exit code 0 on success, 1 on bad arguments or configuration, 2 on
-// unreadable input, 3 when the output cannot be written.
+// final trajectory: loop-closed with loop closure on, else smoothed), map_filtered.*,
+// map_odometry.*, the figures and report.txt. report.txt is written last: a directory without it
+// holds no complete result. --export-graphs DIR also writes, into DIR, the problems of the last two
+// optimisations (ekf_slam_core/pose_graph/graph_io.h gives the formats), to be solved again by
+// other solvers (docs/solvers.md): pose_graph.txt, the loop-closure pose graph as the back end's
+// final optimisation started from (when a loop was closed), pose_graph_cold.txt, the same graph
+// started from the front end's key-scan poses, and landmark_graph.txt, the full smoother's last
+// optimisation as it started; with pose_graph_scans.txt and landmark_graph_scans.txt, the scan
+// anchors that turn a solution into one pose per scan (as trajectory_optimized.txt and
+// trajectory_smoothed.txt are made from the run's own solutions). Exit code 0 on success, 1 on bad
+// arguments or configuration, 2 on unreadable input, 3 when the output cannot be written.
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -267,7 +264,6 @@ std::string wheelEdgesLine(const ekf_slam::WheelNoise& wheels) {
   return line.str();
 }
 
-
 // The command line.
 struct Arguments {
   std::string bag_path, carmen_path, out_dir, config_path, export_dir;
@@ -438,13 +434,15 @@ std::string writeResults(const std::string& dir, const ekf_slam::SlamConfig& con
                          const ekf_slam::LogData& log, const ekf_slam::SlamPipeline& pipeline,
                          const Trajectories& t) {
   std::string error = ekf_slam::writeTrajectory(dir + "/trajectory_filtered.txt", t.filtered);
-  if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_smoothed.txt", t.smoothed);
+  if (error.empty())
+    error = ekf_slam::writeTrajectory(dir + "/trajectory_smoothed.txt", t.smoothed);
   // What a live run publishes for each scan at that scan's time.
   if (error.empty()) {
     error = ekf_slam::writeTrajectory(dir + "/trajectory_live.txt", pipeline.causalScanPoses());
   }
   if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_rts.txt", t.rts);
-  if (error.empty()) error = ekf_slam::writeTrajectory(dir + "/trajectory_odometry.txt", t.odometry);
+  if (error.empty())
+    error = ekf_slam::writeTrajectory(dir + "/trajectory_odometry.txt", t.odometry);
   if (error.empty()) error = writeFilteredCovariances(dir + "/covariance_filtered.txt", pipeline);
   if (error.empty() && config.pipeline.scan_matching.enabled) {
     // The control source alone (scan-matched odometry, before the filter).
@@ -483,8 +481,10 @@ std::string writeMaps(const std::string& dir, const ekf_slam::SlamConfig& config
   malloc_trim(0);
 #endif
   std::string error = buildMap(config.map, log, t.final(), laser).save(dir + "/map");
-  if (error.empty()) error = buildMap(config.map, log, t.filtered, laser).save(dir + "/map_filtered");
-  if (error.empty()) error = buildMap(config.map, log, t.odometry, laser).save(dir + "/map_odometry");
+  if (error.empty())
+    error = buildMap(config.map, log, t.filtered, laser).save(dir + "/map_filtered");
+  if (error.empty())
+    error = buildMap(config.map, log, t.odometry, laser).save(dir + "/map_odometry");
   return error;
 }
 
