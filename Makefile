@@ -47,6 +47,7 @@ build: deps workspace
 
 check:
 	@tools/ci/check_core_ros_free.sh
+	@tools/ci/check_layers.sh
 	@tools/ci/check_format.sh
 	@tools/ci/check_catkin_lint.sh
 	@tools/ci/check_rosdep.sh

@@ -13,7 +13,9 @@
      finite numbers, the occupancy map and the figures (drawn by the
      installed plotting script);
    - sim.launch starts headless, on a master of its own, and the SLAM node
-     publishes a pose within a minute.
+     publishes a pose within a minute;
+   - a package built on ekf_slam (test/consumer) builds against the
+     installed headers and libraries and runs (consumer_package_test.py).
 """
 import math
 import os
@@ -31,6 +33,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
 from ekf_slam_tools.trajectories import read_rows
+from consumer_package_test import build_and_run_consumer
 
 # The room (m): walls of a box and a square pillar, as segments.
 ROOM = [(-4.0, -3.0), (4.0, -3.0), (4.0, 3.0), (-4.0, 3.0)]
@@ -199,6 +202,12 @@ class InstallSpace(unittest.TestCase):
             except subprocess.TimeoutExpired:
                 os.killpg(launch.pid, signal.SIGKILL)
                 launch.wait()
+
+    def test_4_a_package_builds_on_the_installed_core(self):
+        ok, text = build_and_run_consumer(os.path.join(self.prefix, "setup.bash"),
+                                          os.path.join(self.work, "consumer_ws"))
+        print(text)
+        self.assertTrue(ok, text)
 
 
 if __name__ == "__main__":

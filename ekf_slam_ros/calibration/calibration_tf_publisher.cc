@@ -14,7 +14,7 @@
 #include <cmath>
 #include <string>
 
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 #include "ekf_slam_ros/calibration/laser_mount.h"
 

@@ -15,7 +15,7 @@
 #include <string>
 
 #include "ekf_slam_core/sim/drive.h"
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace calibration {

@@ -1,6 +1,6 @@
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace ros_conversions {

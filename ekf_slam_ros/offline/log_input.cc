@@ -14,8 +14,8 @@
 
 #include "ekf_slam_core/io/carmen_log.h"
 #include "ekf_slam_core/pipeline/odometry_track.h"
-#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace {

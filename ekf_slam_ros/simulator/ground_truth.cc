@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace sim {

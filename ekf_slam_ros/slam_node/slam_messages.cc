@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "ekf_slam_core/filter/chi_square.h"
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace {

@@ -14,8 +14,8 @@
 #include "ekf_slam_core/mapping/occupancy_grid.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
-#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 namespace {

@@ -23,8 +23,8 @@
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
 
-#include "ekf_slam_ros/conversions/pose_conversion.h"
 #include "p3dx_driver/emulator/p3dx_emulator.h"
+#include "ros_conversions/pose_conversion.h"
 #include "serial_io/pseudo_terminal.h"
 
 namespace {

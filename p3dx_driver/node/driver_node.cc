@@ -9,7 +9,7 @@
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt16.h>
 
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace p3dx {
 namespace {

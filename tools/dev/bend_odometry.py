@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Writes a copy of a bag whose wheel odometry is bent by a constant heading bias.
 
 Every odometry increment (between consecutive /odom messages) gets an extra

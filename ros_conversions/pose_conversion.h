@@ -1,7 +1,8 @@
 // Planar poses between ROS messages and the core (Pose2, 3×3 covariances):
-// the one place where a quaternion becomes a heading and back, for the live
-// node and the offline runner alike, so the two read a transform the same
-// way to the last bit.
+// the one place where a quaternion becomes a heading and back, for the
+// drivers, the live node and the offline runner alike, so that all read a
+// transform the same way to the last bit. Below ekf_slam_ros: it needs only
+// the core's geometry (tools/ci/check_layers.sh).
 #pragma once
 
 #include <geometry_msgs/Pose.h>

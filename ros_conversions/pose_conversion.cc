@@ -1,4 +1,4 @@
-#include "ekf_slam_ros/conversions/pose_conversion.h"
+#include "ros_conversions/pose_conversion.h"
 
 #include <cmath>
 
