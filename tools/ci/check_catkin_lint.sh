@@ -29,9 +29,11 @@ tools/ci/run_benchmarks.sh         # make bench: runs the bench workspace's benc
 tools/ci/run_dataset_benchmark.sh  # make benchmark: reads ../shared/datasets beside the checkout
 tools/ci/run_demo.sh               # make demo: starts the source tree's tools/dev/sim_monitor.py
 tools/ci/run_fuzzers.sh            # make fuzz: runs a fuzz workspace on test/fuzz_corpus
+tools/ci/update_results_doc.py     # writes make benchmark's tables into the source tree's docs
 tools/dev/landmark_comparison.sh   # make landmark-comparison: reads ../shared/datasets beside the checkout
 tools/dev/line_experiment.sh       # make line-experiment: builds a workspace of the checkout
 tools/dev/office_monte_carlo.sh    # runs the source tree's config/ and tools/ scripts
+tools/dev/compare_outputs.sh       # compares two benchmark output folders of the checkout
 tools/dev/solver_comparison.sh     # builds a workspace of the checkout, reads ../shared/datasets
 tools/dev/make_fuzz_seeds.py       # writes test/fuzz_corpus of the source tree
 tools/dev/make_worlds.py           # writes config/worlds of the source tree
