@@ -89,7 +89,7 @@ class BackEndLink {
   std::deque<Pose2> pending_filtered_;  // the filter's pose at loop scans pending_base_ …
   long pending_base_ = 0;               // … on, whose key scans the back end may still report
   std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
-  std::optional<Pose2> map_from_graph_;  // the graph's frame in the map frame (first scan)
+  std::optional<Pose2> map_from_graph_;         // the graph's frame in the map frame (first scan)
 };
 
 }  // namespace ekf_slam

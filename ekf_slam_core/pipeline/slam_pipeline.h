@@ -172,8 +172,7 @@ class SlamPipeline {
   void anchorAt(double stamp, const Pose2& odometry);
   // The scan's record: through the back end (the causal estimate), then
   // into the history.
-  void record(double stamp, const Scan* scan, const Pose2& odometry, bool usable,
-              ScanResult* out);
+  void record(double stamp, const Scan* scan, const Pose2& odometry, bool usable, ScanResult* out);
 
   PipelineOptions options_;
   FrontEnd front_end_;
