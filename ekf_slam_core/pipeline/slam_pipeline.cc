@@ -10,7 +10,8 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       front_end_(options),
       filter_(options),
       back_end_(options),
-      history_(options.history_scans, options.initial_pose, options.initial_pose_covariance) {}
+      history_(options.history_scans, options.initial_pose, options.initial_pose_covariance,
+               {options.keep_readings, options.readings_grid, options.filter.laser_pose}) {}
 
 PipelineCounters SlamPipeline::counters() const {
   PipelineCounters out;
@@ -167,8 +168,7 @@ bool SlamPipeline::predict(double stamp, const Pose2& odometry, double dt, ScanR
 }
 
 void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* features,
-                           const Pose2& odometry, bool predict_first, double dt,
-                           ScanResult* out) {
+                           const Pose2& odometry, bool predict_first, double dt, ScanResult* out) {
   const OdometryControl control = controlFromOdometry(last_odometry_, odometry);
   if (predict_first) {
     if (!predict(stamp, odometry, dt, out)) return;
@@ -187,8 +187,8 @@ void SlamPipeline::iterate(double stamp, const Scan* scan, const FeatureSet* fea
   out->features = scan != nullptr ? extractFeatures(*scan, options_.features) : *features;
   filter_.update(out);
   history_.addIteration(stamp, filter_.filter(), predict_first ? &control : nullptr,
-                        out->observations, out->iteration,
-                        local_motion ? &*local_motion : nullptr, wheels_usable ? &wheels : nullptr);
+                        out->observations, out->iteration, local_motion ? &*local_motion : nullptr,
+                        wheels_usable ? &wheels : nullptr);
   ++counters_.iterations;
   filter_.maintain(*out);
   out->outcome = ScanOutcome::kIterated;
@@ -228,7 +228,7 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
   r.odometry_at_iteration = last_odometry_;
   r.causal = causal;
   out->causal_pose = causal;
-  if (history_.add(r) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
+  if (history_.add(r, scan) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
 }
 
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,
