@@ -124,25 +124,6 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
                                         [this](const ros::TimerEvent&) { diagnostics_.update(); });
 }
 
-SlamNode::StoredScan::StoredScan(const Scan& scan)
-    : ranges(scan.ranges.begin(), scan.ranges.end()),
-      angle_min(scan.angle_min),
-      angle_increment(scan.angle_increment),
-      range_min(scan.range_min),
-      range_max(scan.range_max),
-      stamp(scan.stamp) {}
-
-Scan SlamNode::StoredScan::toScan() const {
-  Scan scan;
-  scan.ranges.assign(ranges.begin(), ranges.end());
-  scan.angle_min = angle_min;
-  scan.angle_increment = angle_increment;
-  scan.range_min = range_min;
-  scan.range_max = range_max;
-  scan.stamp = stamp;
-  return scan;
-}
-
 void SlamNode::createPipeline(const Pose2& laser_pose) {
   config_.pipeline.filter.laser_pose = laser_pose;
   laser_pose_ = laser_pose;
@@ -152,6 +133,11 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   // memory follows the map, not the time (the causal poses do not depend
   // on it). The offline runner keeps every scan: it writes one pose each.
   options.history_scans = params_.history_max_scans;
+  // ~smooth draws its grid from the back end's key scans; without a back
+  // end (loop closure off) the history keeps the scans' readings, and casts
+  // those older than history_max_scans into a grid of its own.
+  options.keep_readings = params_.input == "scan" && !config_.pipeline.loop_closure.enabled;
+  options.readings_grid = config_.map;
   if (start_pose_) {
     options.initial_pose = *start_pose_;
     options.initial_pose_covariance = start_covariance_;
@@ -199,27 +185,9 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
       times->add(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
   } timer{started, processing_times_.get()};
-  const long records_before = pipeline_->recordedScans();
   const ScanResult result = pending.scan ? pipeline_->processScan(*pending.scan, odometry)
                                          : pipeline_->processFeatures(pending.header.stamp.toSec(),
                                                                       *pending.features, odometry);
-  // ~smooth draws its grid from the back end's key scans; without a back
-  // end (loop closure off) it needs the scans' ranges.
-  if (pending.scan && !config_.pipeline.loop_closure.enabled &&
-      pipeline_->recordedScans() > records_before) {
-    if (stored_scans_.empty()) stored_first_ = records_before;
-    stored_scans_.emplace_back(*pending.scan);
-    stored_scans_.back().pose = result.causal_pose;
-    if (params_.history_max_scans > 0 &&
-        static_cast<long>(stored_scans_.size()) > params_.history_max_scans) {
-      // One scan leaves per scan: the grid update costs a scan's ray cast.
-      if (!history_grid_) history_grid_.emplace(config_.map);
-      const StoredScan& oldest = stored_scans_.front();
-      history_grid_->insertScan(compose(oldest.pose, *laser_pose_), oldest.toScan());
-      stored_scans_.pop_front();
-      ++stored_first_;
-    }
-  }
   if (step_pending_) {  // ~step: this was the one scan; pause until the next step
     step_pending_ = false;
     paused_ = true;
@@ -309,9 +277,6 @@ void SlamNode::resetState() {
   clearWaiting();
   last_accepted_stamp_.reset();
   step_pending_ = false;
-  stored_scans_.clear();
-  stored_first_ = 0;
-  history_grid_.reset();
   path_.poses.clear();
   odometry_path_.poses.clear();
   odometry_anchor_.reset();

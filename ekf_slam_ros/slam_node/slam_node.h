@@ -234,25 +234,6 @@ class SlamNode {
   std::unique_ptr<tf2_ros::MessageFilter<Features>> features_filter_;
   std::deque<PendingInput> waiting_;
   std::optional<ros::Time> last_accepted_stamp_;  // newest scan let into the filter
-  // One per pipeline record, for the ~smooth grid (input: scan) when loop
-  // closure is off; with it on, ~smooth casts the back end's key scans and
-  // nothing is kept here. The ranges arrive as float32 and are kept so
-  // (half the memory of the core's doubles, and the same values when
-  // converted back). With history_max_scans, the newest that many are
-  // kept (records stored_first_ on); an older one is cast into
-  // history_grid_ at the pose published for it when it leaves, so that the
-  // ~smooth grid still covers every place the robot saw, in memory that
-  // grows with the area mapped instead of the time.
-  struct StoredScan {
-    std::vector<float> ranges;
-    double angle_min = 0.0, angle_increment = 0.0, range_min = 0.0, range_max = 0.0, stamp = 0.0;
-    Pose2 pose;  // map → base_link published for the scan (the causal estimate)
-    explicit StoredScan(const Scan& scan);
-    Scan toScan() const;
-  };
-  std::deque<StoredScan> stored_scans_;
-  long stored_first_ = 0;                      // pipeline record number of stored_scans_.front()
-  std::optional<OccupancyGrid> history_grid_;  // scans that left stored_scans_
   nav_msgs::Path path_;
   // The robot's own odometry drawn in the map frame, tied to the SLAM pose at
   // the first scan: where the robot would believe it is without SLAM.

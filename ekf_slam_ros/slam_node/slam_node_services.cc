@@ -267,27 +267,28 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
   // no ranges of its own, and its memory grows with the key scans only.
   // Key scans older than the smoothed scans keep their loop-closed poses,
   // and lead the path.
+  const ScanHistory& history = pipeline_->history();
   std::vector<SlamPipeline::KeyScan> keys;
-  if (stored_scans_.empty()) keys = keysAtSmoothedPoses(pipeline_->keyScans(true), smoothed);
+  if (history.keptScans().empty()) keys = keysAtSmoothedPoses(pipeline_->keyScans(true), smoothed);
   long older_keys = 0;
   for (const SlamPipeline::KeyScan& key : keys) {
     if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
     addToPath(key.stamp, key.pose);
     ++older_keys;
   }
-  // Without loop closure the stored scans are cast at their smoothed poses,
-  // over the grid of the scans older than them (history_grid_).
-  OccupancyGrid grid = history_grid_ ? *history_grid_ : OccupancyGrid(config_.map);
+  // Without loop closure the history's kept scans are cast at their
+  // smoothed poses, over its grid of the scans older than them.
+  OccupancyGrid grid =
+      history.leftScansGrid() ? *history.leftScansGrid() : OccupancyGrid(config_.map);
   const long first_record = pipeline_->firstScan();
   for (size_t i = 0; i < smoothed.size(); ++i) {
     addToPath(smoothed[i].stamp, smoothed[i].pose);
-    const long stored = first_record + static_cast<long>(i) - stored_first_;
-    if (stored >= 0 && stored < static_cast<long>(stored_scans_.size())) {
-      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[stored].toScan());
+    if (const KeptScan* kept = history.keptScan(first_record + static_cast<long>(i))) {
+      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), kept->toScan());
     }
   }
   smoothed_path_publisher_.publish(path);
-  if (stored_scans_.empty() && keys.empty()) {
+  if (history.keptScans().empty() && keys.empty()) {
     // input: features: the node never saw the ranges a grid is cast from.
     response.success = true;
     response.message = "smoothed " + std::to_string(smoothed.size()) +
