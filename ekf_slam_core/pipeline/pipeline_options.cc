@@ -42,6 +42,10 @@ std::string PipelineOptions::validate() const {
     return "rooms.enabled needs walls: landmarks points+lines or points+lines_theta";
   }
   if (history_scans < 0) return "history_scans must be >= 0 (0: every scan)";
+  if (keep_readings) {
+    error = readings_grid.validate();
+    if (!error.empty()) return "readings_grid: " + error;
+  }
   return "";
 }
 

@@ -12,6 +12,7 @@
 #include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
+#include "ekf_slam_core/mapping/occupancy_grid.h"
 #include "ekf_slam_core/mecp/room_gating.h"
 #include "ekf_slam_core/pipeline/line_landmarks.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
@@ -78,6 +79,18 @@ struct PipelineOptions {
   // the poses a scan is given do not depend on n. Not a file setting: the
   // program decides (the node's history_max_scans).
   long history_scans = 0;
+  // Keep each recorded scan's readings in the history, for a grid cast
+  // along smoothed poses (the live node's ~smooth without loop closure):
+  // float32 ranges and their geometry (ScanHistory::keptScans). With
+  // history_scans n > 0 the readings of the newest n scans are kept, and
+  // an older scan's are cast into the history's own occupancy grid
+  // (readings_grid; ScanHistory::leftScansGrid) at its causal pose as it
+  // leaves, so that the grid still covers every place the robot saw in
+  // memory that grows with the area, not the time. The poses do not depend
+  // on it. Not a file setting: the program decides (the offline runner
+  // keeps no readings).
+  bool keep_readings = false;
+  OccupancyGridOptions readings_grid;
   double min_travel_distance = 0.0;  // m: iterate only after this much translation …
   double min_travel_angle = 0.0;     // rad: … or this much rotation (both 0: every scan)
   double max_landmark_range = 20.0;  // m: farther point features are not used

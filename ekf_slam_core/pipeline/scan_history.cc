@@ -4,8 +4,30 @@
 
 namespace ekf_slam {
 
-ScanHistory::ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance)
-    : bound_(bound) {
+KeptScan::KeptScan(long scan_number, const Scan& readings, const Pose2& causal_pose)
+    : scan(scan_number),
+      ranges(readings.ranges.begin(), readings.ranges.end()),
+      angle_min(readings.angle_min),
+      angle_increment(readings.angle_increment),
+      range_min(readings.range_min),
+      range_max(readings.range_max),
+      stamp(readings.stamp),
+      causal(causal_pose) {}
+
+Scan KeptScan::toScan() const {
+  Scan out;
+  out.ranges.assign(ranges.begin(), ranges.end());
+  out.angle_min = angle_min;
+  out.angle_increment = angle_increment;
+  out.range_min = range_min;
+  out.range_max = range_max;
+  out.stamp = stamp;
+  return out;
+}
+
+ScanHistory::ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance,
+                         const KeptReadingsOptions& readings)
+    : bound_(bound), readings_(readings) {
   full_recorder_.setPrior(prior, prior_covariance);
 }
 
@@ -19,7 +41,16 @@ void ScanHistory::addIteration(double stamp, const EkfSlam& filter, const Odomet
 
 // The history beyond the bound goes an eighth of the bound at a time (one
 // erase per many scans instead of one per scan).
-long ScanHistory::add(const ScanRecord& record) {
+long ScanHistory::add(const ScanRecord& record, const Scan* scan) {
+  if (readings_.keep && scan != nullptr) {
+    kept_.emplace_back(recordedScans(), *scan, record.causal);
+    if (bound_ > 0 && static_cast<long>(kept_.size()) > bound_) {
+      if (!left_grid_) left_grid_.emplace(readings_.grid);
+      const KeptScan& oldest = kept_.front();
+      left_grid_->insertScan(compose(oldest.causal, readings_.laser_pose), oldest.toScan());
+      kept_.pop_front();
+    }
+  }
   records_.push_back(record);
   const long keep = bound_;
   if (keep <= 0) return 0;
@@ -39,6 +70,12 @@ long ScanHistory::add(const ScanRecord& record) {
     first_iteration_ += gone;
   }
   return drop;
+}
+
+const KeptScan* ScanHistory::keptScan(long scan) const {
+  const auto at = std::lower_bound(kept_.begin(), kept_.end(), scan,
+                                   [](const KeptScan& kept, long n) { return kept.scan < n; });
+  return at != kept_.end() && at->scan == scan ? &*at : nullptr;
 }
 
 const ScanRecord* ScanHistory::record(long scan) const {

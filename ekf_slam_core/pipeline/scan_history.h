@@ -10,11 +10,22 @@
 // with the iterations they hang off. The oldest kept iteration then takes
 // the place of the first pose for the full smoother: its prior is the
 // filter's pose and covariance at that iteration.
+//
+// Readings (PipelineOptions::keep_readings, a live node's choice): each
+// recorded scan's readings are kept beside its record, for a grid cast
+// along smoothed poses. With a bound n the readings of the newest n scans
+// are kept; an older scan's leave one at a time, each cast into the
+// history's own occupancy grid at the scan's causal pose as it goes. One
+// scan leaves per scan (not n/8 with each trim of the records): a trim's
+// worth of ray casts at once would stall the scan that triggers it.
 #pragma once
 
+#include <deque>
+#include <optional>
 #include <vector>
 
 #include "ekf_slam_core/geometry/stamped_pose.h"
+#include "ekf_slam_core/mapping/occupancy_grid.h"
 #include "ekf_slam_core/smoother/full_smoother.h"
 #include "ekf_slam_core/smoother/rts_smoother.h"
 
@@ -35,10 +46,30 @@ struct ScanRecord {
   Pose2 causal;
 };
 
+// A recorded scan's readings as the laser gave them. The ranges are kept as
+// float32, as a laser driver sends them: half the memory of the core's
+// doubles, and the same values when converted back.
+struct KeptScan {
+  long scan = 0;  // its record's number (counting from the run's first scan)
+  std::vector<float> ranges;
+  double angle_min = 0.0, angle_increment = 0.0, range_min = 0.0, range_max = 0.0, stamp = 0.0;
+  Pose2 causal;  // ScanRecord::causal of it: where a grid of the left scans casts it
+  KeptScan(long scan, const Scan& readings, const Pose2& causal);
+  Scan toScan() const;
+};
+
+// Which readings the history keeps (PipelineOptions::keep_readings).
+struct KeptReadingsOptions {
+  bool keep = false;
+  OccupancyGridOptions grid;  // of the scans that left the kept readings
+  Pose2 laser_pose;           // base_link → laser, where the rays start
+};
+
 class ScanHistory {
  public:
   // `bound`: history_scans. The full smoother's first pose is `prior`.
-  ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance);
+  ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance,
+              const KeptReadingsOptions& readings = {});
 
   // The prediction of an iteration (for the RTS smoother) …
   void addTransition(const Matrix3& F, const Pose2& predicted, const Matrix3& predicted_cov) {
@@ -54,9 +85,10 @@ class ScanHistory {
   int currentIteration() const {
     return first_iteration_ + static_cast<int>(recorder_.steps().size()) - 1;
   }
-  // Appends a scan's record, then trims to the bound. Returns the number of
+  // Appends a scan's record (and, when readings are kept, the readings of
+  // `scan` if given), then trims to the bound. Returns the number of
   // records dropped from the front (0 almost always).
-  long add(const ScanRecord& record);
+  long add(const ScanRecord& record, const Scan* scan = nullptr);
 
   // Records of scans firstScan() to recordedScans() − 1, and the
   // iterations from firstIteration() on.
@@ -69,6 +101,13 @@ class ScanHistory {
   int firstIteration() const { return first_iteration_; }
   const TrajectoryRecorder& iterations() const { return recorder_; }
   const FullSmootherRecorder& smootherRecord() const { return full_recorder_; }
+
+  // The kept readings, oldest first (empty unless readings are kept).
+  const std::deque<KeptScan>& keptScans() const { return kept_; }
+  // The readings of scan `scan`, or null when they are not kept.
+  const KeptScan* keptScan(long scan) const;
+  // The grid of the scans whose readings left; null while none has.
+  const OccupancyGrid* leftScansGrid() const { return left_grid_ ? &*left_grid_ : nullptr; }
 
   // One pose per kept scan from one pose per kept iteration (scans between
   // iterations follow their odometry from their iteration); a scan whose
@@ -86,6 +125,9 @@ class ScanHistory {
   int first_iteration_ = 0;  // iteration number of recorder_'s and full_recorder_'s first
   TrajectoryRecorder recorder_;
   FullSmootherRecorder full_recorder_;
+  KeptReadingsOptions readings_;
+  std::deque<KeptScan> kept_;               // the newest `bound_` scans' readings
+  std::optional<OccupancyGrid> left_grid_;  // the scans that left kept_
 };
 
 }  // namespace ekf_slam

@@ -10,7 +10,8 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       front_end_(options),
       filter_(options),
       back_end_(options),
-      history_(options.history_scans, options.initial_pose, options.initial_pose_covariance) {}
+      history_(options.history_scans, options.initial_pose, options.initial_pose_covariance,
+               {options.keep_readings, options.readings_grid, options.filter.laser_pose}) {}
 
 PipelineCounters SlamPipeline::counters() const {
   PipelineCounters out;
@@ -227,7 +228,7 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
   r.odometry_at_iteration = last_odometry_;
   r.causal = causal;
   out->causal_pose = causal;
-  if (history_.add(r) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
+  if (history_.add(r, scan) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
 }
 
 std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,

@@ -882,3 +882,103 @@ TEST(SlamPipeline, TheHistoryBoundIsValidated) {
 
 }  // namespace
 }  // namespace ekf_slam
+
+namespace ekf_slam {
+namespace {
+
+// keep_readings (a live node's ~smooth grid without loop closure): the
+// history keeps the newest history_scans scans' readings as the laser gave
+// them, and casts each older scan into a grid of its own at its causal
+// pose as it leaves. The poses do not change with it, to the bit.
+TEST(SlamPipeline, KeptReadingsFollowTheBoundAndTheLeftScansFormAGrid) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  std::mt19937 rng(11);
+  const long bound = 40;
+  PipelineOptions plain = defaultOptions(laser);
+  plain.history_scans = bound;
+  PipelineOptions keeping = plain;
+  keeping.keep_readings = true;
+  keeping.readings_grid.resolution = 0.1;
+  ASSERT_EQ(keeping.validate(), "");
+  PipelineOptions keeping_all = keeping;
+  keeping_all.history_scans = 0;
+  SlamPipeline without(plain), with(keeping), with_all(keeping_all);
+  std::vector<Scan> scans;
+  std::vector<Pose2> causal;
+  const double radius = 2.3, step = 0.08;
+  for (int i = 0; i < 150; ++i) {
+    const double a = step * i / radius;
+    const Pose2 truth(3.0 + radius * std::sin(a), 1.5 - radius * std::cos(a), a);
+    Scan scan = scanAt(world, compose(truth, laser), 0.1 * i, &rng);
+    // Ranges as a laser driver sends them (float32), as a node receives them.
+    for (double& r : scan.ranges) r = static_cast<float>(r);
+    const ScanResult a_without = without.processScan(scan, truth);
+    const ScanResult a_with = with.processScan(scan, truth);
+    with_all.processScan(scan, truth);
+    ASSERT_TRUE(a_without.causal_pose.x == a_with.causal_pose.x &&
+                a_without.causal_pose.y == a_with.causal_pose.y &&
+                a_without.causal_pose.theta == a_with.causal_pose.theta)
+        << "scan " << i;
+    scans.push_back(scan);
+    causal.push_back(a_with.causal_pose);
+  }
+  // Without the option nothing is kept.
+  EXPECT_TRUE(without.history().keptScans().empty());
+  EXPECT_EQ(without.history().leftScansGrid(), nullptr);
+  // Unbounded: every scan's readings, and no grid.
+  EXPECT_EQ(with_all.history().keptScans().size(), scans.size());
+  EXPECT_EQ(with_all.history().leftScansGrid(), nullptr);
+
+  // Bounded: exactly the newest `bound` scans, the same readings back.
+  const ScanHistory& history = with.history();
+  ASSERT_EQ(static_cast<long>(history.keptScans().size()), bound);
+  const long first_kept = static_cast<long>(scans.size()) - bound;
+  EXPECT_EQ(history.keptScans().front().scan, first_kept);
+  EXPECT_EQ(history.keptScan(first_kept - 1), nullptr);
+  for (long n = first_kept; n < static_cast<long>(scans.size()); ++n) {
+    const KeptScan* kept = history.keptScan(n);
+    ASSERT_NE(kept, nullptr) << n;
+    const Scan back = kept->toScan();
+    EXPECT_EQ(back.ranges, scans[n].ranges) << n;
+    EXPECT_EQ(back.stamp, scans[n].stamp);
+    EXPECT_EQ(back.angle_min, scans[n].angle_min);
+    EXPECT_EQ(back.angle_increment, scans[n].angle_increment);
+    EXPECT_TRUE(kept->causal.x == causal[n].x && kept->causal.theta == causal[n].theta) << n;
+    // Every kept scan has its record (the records keep at least the bound).
+    EXPECT_NE(history.record(n), nullptr) << n;
+  }
+  // The older scans, cast at their causal poses, scan by scan.
+  OccupancyGridOptions grid_options;
+  grid_options.resolution = 0.1;
+  OccupancyGrid expected(grid_options);
+  for (long n = 0; n < first_kept; ++n) expected.insertScan(compose(causal[n], laser), scans[n]);
+  const OccupancyGrid* left = history.leftScansGrid();
+  ASSERT_NE(left, nullptr);
+  EXPECT_EQ(left->resolution(), 0.1);
+  EXPECT_EQ(left->width(), expected.width());
+  EXPECT_EQ(left->height(), expected.height());
+  EXPECT_TRUE(left->origin() == expected.origin());
+  EXPECT_EQ(left->occupancyValues(), expected.occupancyValues());
+  const std::vector<int8_t> cells = expected.trinaryValues();
+  EXPECT_GT(std::count(cells.begin(), cells.end(), 100), 0);  // walls were seen
+}
+
+TEST(SlamPipeline, KeptReadingsNeedNoScanAndTheirGridIsValidated) {
+  PipelineOptions options = defaultOptions(Pose2());
+  options.keep_readings = true;
+  options.readings_grid.resolution = 0.0;
+  EXPECT_NE(options.validate().find("readings_grid"), std::string::npos);
+  options.readings_grid.resolution = 0.05;
+  ASSERT_EQ(options.validate(), "");
+  // Features in: the history keeps records, but no readings.
+  SlamPipeline pipeline(options);
+  FeatureSet features;
+  pipeline.processFeatures(0.0, features, Pose2());
+  pipeline.processFeatures(0.1, features, Pose2(0.1, 0.0, 0.0));
+  EXPECT_EQ(pipeline.recordedScans(), 2);
+  EXPECT_TRUE(pipeline.history().keptScans().empty());
+}
+
+}  // namespace
+}  // namespace ekf_slam

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "ekf_slam_core/geometry/angle.h"
+#include "ros_params/param_fields.h"
 #include "ros_params/private_params.h"
 
 namespace ekf_slam {
@@ -62,69 +63,69 @@ bool loadNodeSlamConfig(const ros::NodeHandle& private_node, const std::string& 
   return error->empty();
 }
 
-bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* p, std::string* error) {
+namespace {
+
+// Every parameter of `params` from the private namespace of `node` (its
+// visitFields), then its rules; unknown keys are errors.
+template <class Params>
+bool loadParams(const ros::NodeHandle& node, Params* params, std::string* error) {
   PrivateParams read(node);
-  read.text("config_file", &p->config_file, /*required=*/false);
   read.allow("slam");  // the SLAM configuration (loadNodeSlamConfig)
-  read.text("map_frame", &p->map_frame, /*required=*/true);
-  read.text("odom_frame", &p->odom_frame, /*required=*/true);
-  read.text("base_frame", &p->base_frame, /*required=*/true);
-  read.text("scan_topic", &p->scan_topic, /*required=*/true);
-  read.text("input", &p->input, /*required=*/true);
-  read.text("features_topic", &p->features_topic, /*required=*/true);
-  if (p->input != "scan" && p->input != "features") {
-    read.fail("input", "must be 'scan' or 'features', not '" + p->input + "'");
-  }
-  read.number("tf_timeout", &p->tf_timeout, 0.0, 60.0);
-  read.integer("scan_queue_size", &p->scan_queue_size, 1, 10000);
-  read.number("tf_cache_time", &p->tf_cache_time, 1.0, 3600.0);
-  read.number("transform_tolerance", &p->transform_tolerance, 0.0, 10.0);
-  read.number("tf_publish_rate", &p->tf_publish_rate, 0.1, 1000.0);
-  read.integer("min_valid_readings", &p->min_valid_readings, 2, 100000);
-  read.number("laser_pose_tolerance", &p->laser_pose_tolerance, 0.0, 10.0);
-  read.integer("nis_window", &p->nis_window, 1, 1000000);
-  read.number("ellipse_probability", &p->ellipse_probability, 0.01, 0.9999);
-  read.flag("localize_only", &p->localize_only);
-  read.flag("start_paused", &p->start_paused);
-  read.text("initial_map", &p->initial_map, /*required=*/false);
-  read.number("diagnostic_period", &p->diagnostic_period, 0.01, 60.0);
-  read.integer("path_max_poses", &p->path_max_poses, 0, 100000000);
-  read.integer("history_max_scans", &p->history_max_scans, 0, 100000000);
-  read.number("map_update_interval", &p->map_update_interval, 0.0, 3600.0);
-  read.number("max_future_stamp", &p->max_future_stamp, 0.0, 1e6);
-  read.text("rear_scan_topic", &p->rear_scan_topic, /*required=*/false);
-  read.number("rear_scan_tolerance", &p->rear_scan_tolerance, 0.0, 10.0);
-  read.number("merged_angle_increment", &p->merged_angle_increment, 0.0, kPi / 4.0);
-  if (p->merged_angle_increment > 0.0 && p->merged_angle_increment < 1e-4) {
-    read.fail("merged_angle_increment",
-              "must be 0 (the scan's own increment) or in [0.0001, pi/4] rad, got " +
-                  std::to_string(p->merged_angle_increment));
-  }
-  if (!p->rear_scan_topic.empty()) {
-    if (p->input != "scan") {
-      read.fail("rear_scan_topic",
-                "needs input 'scan' (the rear scan is merged into the raw scans), not '" +
-                    p->input + "'");
-    }
-    if (p->rear_scan_topic == p->scan_topic) {
-      read.fail("rear_scan_topic", "must differ from scan_topic (" + p->scan_topic + ")");
-    }
-  }
-  if (p->map_frame == p->odom_frame) read.fail("map_frame", "must differ from odom_frame");
-  if (p->odom_frame == p->base_frame) read.fail("base_frame", "must differ from odom_frame");
+  PrivateParamFields fields(read);
+  params->visitFields(fields);
+  for (const auto& [key, why] : params->problems()) read.fail(key, why);
   read.rejectUnknown();
   *error = read.errors();
   return read.ok();
 }
 
-bool loadFeatureNodeParams(const ros::NodeHandle& node, FeatureNodeParams* p, std::string* error) {
-  PrivateParams read(node);
-  read.text("config_file", &p->config_file, /*required=*/false);
-  read.allow("slam");  // the SLAM configuration (loadNodeSlamConfig)
-  read.text("scan_topic", &p->scan_topic, /*required=*/true);
-  read.rejectUnknown();
-  *error = read.errors();
-  return read.ok();
+void requireText(const char* key, const std::string& value, ParamProblems* problems) {
+  if (value.empty()) problems->emplace_back(key, "is required and must not be empty");
+}
+
+}  // namespace
+
+ParamProblems SlamNodeParams::problems() const {
+  ParamProblems out;
+  requireText("map_frame", map_frame, &out);
+  requireText("odom_frame", odom_frame, &out);
+  requireText("base_frame", base_frame, &out);
+  requireText("scan_topic", scan_topic, &out);
+  requireText("input", input, &out);
+  requireText("features_topic", features_topic, &out);
+  if (merged_angle_increment > 0.0 && merged_angle_increment < 1e-4) {
+    out.emplace_back("merged_angle_increment",
+                     "must be 0 (the scan's own increment) or in [0.0001, pi/4] rad, got " +
+                         std::to_string(merged_angle_increment));
+  }
+  if (!rear_scan_topic.empty()) {
+    if (input != "scan") {
+      out.emplace_back(
+          "rear_scan_topic",
+          "needs input 'scan' (the rear scan is merged into the raw scans), not '" + input + "'");
+    }
+    if (rear_scan_topic == scan_topic) {
+      out.emplace_back("rear_scan_topic", "must differ from scan_topic (" + scan_topic + ")");
+    }
+  }
+  if (map_frame == odom_frame) out.emplace_back("map_frame", "must differ from odom_frame");
+  if (odom_frame == base_frame) out.emplace_back("base_frame", "must differ from odom_frame");
+  return out;
+}
+
+ParamProblems FeatureNodeParams::problems() const {
+  ParamProblems out;
+  requireText("scan_topic", scan_topic, &out);
+  return out;
+}
+
+bool loadSlamNodeParams(const ros::NodeHandle& node, SlamNodeParams* params, std::string* error) {
+  return loadParams(node, params, error);
+}
+
+bool loadFeatureNodeParams(const ros::NodeHandle& node, FeatureNodeParams* params,
+                           std::string* error) {
+  return loadParams(node, params, error);
 }
 
 }  // namespace ekf_slam

@@ -1,20 +1,32 @@
 // Node-level parameters of ekf_slam_node (frames, topics, tf waiting, publish
 // rates): read from the private namespace and validated; an unknown key or a
-// bad value stops the node with the key's name. The filter/feature
-// parameters (config/ekf_slam.yaml format) go through the same loader as
-// ekf_slam_offline: from the private namespace `~slam` when present (the
-// launch files load the file there, so `rosparam get` shows every value),
-// else from the file named by `config_file`.
-// Every key, its unit and default: config/ekf_slam_node.yaml.
+// bad value stops the node with the key's name. Each parameter is declared
+// once, in visitFields() below: its name, its default (the member
+// initializer), its unit and its bounds. The loaders walk that declaration:
+// the parameter server's (ros_params/param_fields.h) and the YAML binder's
+// (config/ekf_slam_node.yaml lists every key with its default, which
+// slam_node_params_test.cc checks against it). Rules between fields are in
+// problems(). The filter/feature parameters (config/ekf_slam.yaml format)
+// go through the same loader as ekf_slam_offline: from the private
+// namespace `~slam` when present (the launch files load the file there, so
+// `rosparam get` shows every value), else from the file named by
+// `config_file`.
 #pragma once
 
 #include <ros/node_handle.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "ekf_slam_core/geometry/angle.h"
+#include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_ros/offline/slam_config.h"
 
 namespace ekf_slam {
+
+// A broken rule between parameters: the key to name, and why.
+using ParamProblems = std::vector<std::pair<std::string, std::string>>;
 
 struct SlamNodeParams {
   std::string config_file;  // config/ekf_slam.yaml format; empty: built-in defaults
@@ -59,12 +71,53 @@ struct SlamNodeParams {
   double rear_scan_tolerance = 0.2;  // s: a rear scan further from the scan's stamp is not used
   // rad, bearing step of the merged scan; 0: the scan's own increment.
   double merged_angle_increment = 0.0;
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.text("config_file", config_file, {});
+    v.text("map_frame", map_frame, {});
+    v.text("odom_frame", odom_frame, {});
+    v.text("base_frame", base_frame, {});
+    v.text("scan_topic", scan_topic, {});
+    v.text("input", input, {"scan", "features"});
+    v.text("features_topic", features_topic, {});
+    v.number("tf_timeout", tf_timeout, Bounds::closed(0.0, 60.0, "s"));
+    v.integer("scan_queue_size", scan_queue_size, Bounds::closed(1, 10000, "scans"));
+    v.number("tf_cache_time", tf_cache_time, Bounds::closed(1.0, 3600.0, "s"));
+    v.number("transform_tolerance", transform_tolerance, Bounds::closed(0.0, 10.0, "s"));
+    v.number("tf_publish_rate", tf_publish_rate, Bounds::closed(0.1, 1000.0, "Hz"));
+    v.integer("min_valid_readings", min_valid_readings, Bounds::closed(2, 100000, "readings"));
+    v.number("laser_pose_tolerance", laser_pose_tolerance, Bounds::closed(0.0, 10.0, "m, rad"));
+    v.integer("nis_window", nis_window, Bounds::closed(1, 1000000, "matches"));
+    v.number("ellipse_probability", ellipse_probability, Bounds::closed(0.01, 0.9999));
+    v.flag("localize_only", localize_only);
+    v.flag("start_paused", start_paused);
+    v.text("initial_map", initial_map, {});
+    v.number("diagnostic_period", diagnostic_period, Bounds::closed(0.01, 60.0, "s"));
+    v.integer("path_max_poses", path_max_poses, Bounds::closed(0, 100000000, "poses"));
+    v.integer("history_max_scans", history_max_scans, Bounds::closed(0, 100000000, "scans"));
+    v.number("map_update_interval", map_update_interval, Bounds::closed(0.0, 3600.0, "s"));
+    v.number("max_future_stamp", max_future_stamp, Bounds::closed(0.0, 1e6, "s"));
+    v.text("rear_scan_topic", rear_scan_topic, {});
+    v.number("rear_scan_tolerance", rear_scan_tolerance, Bounds::closed(0.0, 10.0, "s"));
+    v.number("merged_angle_increment", merged_angle_increment,
+             Bounds::closed(0.0, kPi / 4.0, "rad"));
+  }
+  // The rules between fields, and the texts that must not be empty.
+  ParamProblems problems() const;
 };
 
 // False with `error` naming the key (resolved name) on a bad or unknown key.
 struct FeatureNodeParams {
   std::string config_file;  // its `features:` section is used; empty: defaults
   std::string scan_topic = "scan";
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.text("config_file", config_file, {});
+    v.text("scan_topic", scan_topic, {});
+  }
+  ParamProblems problems() const;
 };
 
 bool loadSlamNodeParams(const ros::NodeHandle& private_node, SlamNodeParams* params,

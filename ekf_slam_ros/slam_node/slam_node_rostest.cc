@@ -377,6 +377,9 @@ bool sameLandmarks(const ekf_slam::LandmarkMap& a, const ekf_slam::LandmarkMap& 
   return true;
 }
 
+// Whether a grid on `map` and a grid file hold the same cells (below).
+bool sameGrid(const nav_msgs::OccupancyGrid& map, const GridMapFile& file);
+
 class SlamNodeTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -403,9 +406,102 @@ class SlamNodeTest : public ::testing::Test {
     return waitFor([&] { return observer_.diagnosticsReceived() >= seen + 2; }, 5.0);
   }
 
+  // Pause stops the iterations and counts the scans dropped; resume starts
+  // them again.
+  void expectPauseAndResume() {
+    ASSERT_TRUE(trigger("pause"));
+    ros::WallDuration(0.5).sleep();
+    ASSERT_TRUE(freshDiagnostics());
+    const double iterations = observer_.diagnostic("iterations");
+    const double paused_drops = observer_.diagnostic("dropped: paused");
+    ros::WallDuration(1.5).sleep();
+    ASSERT_TRUE(freshDiagnostics());
+    EXPECT_EQ(observer_.diagnostic("iterations"), iterations);
+    EXPECT_GE(observer_.diagnostic("dropped: paused"), paused_drops + 10);
+    ASSERT_TRUE(trigger("resume"));
+    EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations + 5; }, 5.0));
+  }
+  // ~save_map to `path` while paused: the grid on map is saved bit for bit
+  // to `grid_path`, read back into `file`.
+  void saveShownGrid(const std::string& path, const std::string& grid_path, GridMapFile* file) {
+    ASSERT_TRUE(trigger("pause"));
+    ros::WallDuration(1.5).sleep();
+    const nav_msgs::OccupancyGrid shown = observer_.grid();
+    ekf_slam::SaveMap save;
+    save.request.path = path;
+    ASSERT_TRUE(call("save_map", &save));
+    ASSERT_TRUE(save.response.success) << save.response.message;
+    EXPECT_EQ(save.response.grid_path, grid_path);
+    ASSERT_EQ(readGridMap(save.response.grid_path, file), "");
+    EXPECT_TRUE(sameGrid(shown, *file)) << "the saved grid is not the one on map";
+  }
+  // ~smooth: a smoothed path with one pose per scan since the load, and a
+  // grid with the room's walls and free space.
+  void expectSmoothedGrid() {
+    std_srvs::Trigger smooth;
+    ASSERT_TRUE(call("smooth", &smooth));
+    ASSERT_TRUE(smooth.response.success) << smooth.response.message;
+    EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() > 10; }, 3.0));
+    ASSERT_TRUE(waitFor([&] { return observer_.grid().info.width > 0; }, 3.0));
+    const nav_msgs::OccupancyGrid grid = observer_.grid();
+    EXPECT_EQ(grid.header.frame_id, "map");
+    EXPECT_NEAR(grid.info.resolution, 0.05, 1e-6);
+    int occupied = 0, free_cells = 0;
+    for (int8_t v : grid.data) {
+      occupied += v > 65;
+      free_cells += v >= 0 && v < 35;
+    }
+    EXPECT_GT(occupied, 50) << "the room's walls";
+    EXPECT_GT(free_cells, occupied) << "the room's inside";
+  }
+
   Observer observer_;
   Robot robot_;
 };
+
+geometry_msgs::Pose poseMessage(const Pose2& pose) {
+  geometry_msgs::Pose message;
+  message.position.x = pose.x;
+  message.position.y = pose.y;
+  message.orientation.z = std::sin(0.5 * pose.theta);
+  message.orientation.w = std::cos(0.5 * pose.theta);
+  return message;
+}
+
+// A wall and a θ-only wall on the map's first two points, added to a saved
+// map file (so that a load brings lines too) …
+void addLines(LandmarkMapFile* file) {
+  LineLandmarkRecord wall;
+  wall.id = 1000;
+  wall.p = 2.5;
+  wall.theta = -0.75;
+  wall.covariance << 4e-4, 1e-5, 1e-5, 1e-4;
+  wall.observations = 6;
+  wall.has_extent = true;
+  wall.s_max = 3.0;
+  file->lines.push_back(wall);
+  LineAngleRecord direction;
+  direction.id = 1001;
+  direction.theta = 1.25;
+  direction.variance = 2e-4;
+  direction.endpoint_ids[0] = file->landmarks[0].id;
+  direction.endpoint_ids[1] = file->landmarks[1].id;
+  file->line_angles.push_back(direction);
+}
+
+// … and found again in the map the node publishes after the load.
+void expectAddedLines(const ekf_slam::LandmarkMap& loaded) {
+  ASSERT_EQ(loaded.lines.size(), 1u);
+  EXPECT_EQ(loaded.lines[0].id, 1000);
+  EXPECT_EQ(loaded.lines[0].p, 2.5);
+  EXPECT_EQ(loaded.lines[0].theta, -0.75);
+  EXPECT_EQ(loaded.lines[0].covariance[1], 1e-5);
+  EXPECT_EQ(loaded.lines[0].observations, 6);
+  ASSERT_EQ(loaded.line_angles.size(), 1u);
+  EXPECT_EQ(loaded.line_angles[0].id, 1001);
+  EXPECT_EQ(loaded.line_angles[0].theta, 1.25);
+  EXPECT_EQ(loaded.line_angles[0].variance, 2e-4);
+}
 
 TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   // Freeze the map: no good scans while the bad ones go in (odometry goes on).
@@ -647,20 +743,7 @@ TEST_F(SlamNodeTest, RearLaserIsMergedAndBadRearInputLeavesTheScansAlone) {
 }
 
 TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
-  // Pause: scans are dropped, no iteration.
-  ASSERT_TRUE(trigger("pause"));
-  ros::WallDuration(0.5).sleep();
-  ASSERT_TRUE(freshDiagnostics());
-  const double iterations = observer_.diagnostic("iterations");
-  const double paused_drops = observer_.diagnostic("dropped: paused");
-  ros::WallDuration(1.5).sleep();
-  ASSERT_TRUE(freshDiagnostics());
-  EXPECT_EQ(observer_.diagnostic("iterations"), iterations);
-  EXPECT_GE(observer_.diagnostic("dropped: paused"), paused_drops + 10);
-
-  // Resume: iterations again.
-  ASSERT_TRUE(trigger("resume"));
-  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations + 5; }, 5.0));
+  ASSERT_NO_FATAL_FAILURE(expectPauseAndResume());
 
   // Save while paused (the map stands still), then compare with the file.
   ASSERT_TRUE(trigger("pause"));
@@ -683,23 +766,7 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
     EXPECT_EQ(file.landmarks[i].position.x(), saved.landmarks[i].x);
     EXPECT_EQ(file.landmarks[i].covariance(0, 1), saved.landmarks[i].covariance[1]);
   }
-  // Lines load too: a wall and a θ-only wall on two of the points join the file.
-  LineLandmarkRecord wall;
-  wall.id = 1000;
-  wall.p = 2.5;
-  wall.theta = -0.75;
-  wall.covariance << 4e-4, 1e-5, 1e-5, 1e-4;
-  wall.observations = 6;
-  wall.has_extent = true;
-  wall.s_max = 3.0;
-  file.lines.push_back(wall);
-  LineAngleRecord direction;
-  direction.id = 1001;
-  direction.theta = 1.25;
-  direction.variance = 2e-4;
-  direction.endpoint_ids[0] = file.landmarks[0].id;
-  direction.endpoint_ids[1] = file.landmarks[1].id;
-  file.line_angles.push_back(direction);
+  addLines(&file);  // lines load too
   ASSERT_EQ(writeLandmarkMap(path, file), "");
 
   // Reset: an empty map.
@@ -726,17 +793,7 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   EXPECT_TRUE(waitFor([&] { return sameLandmarks(observer_.map(), saved); }, 3.0))
       << observer_.map().landmarks.size() << " landmarks after load, saved "
       << saved.landmarks.size();
-  const ekf_slam::LandmarkMap loaded = observer_.map();
-  ASSERT_EQ(loaded.lines.size(), 1u);
-  EXPECT_EQ(loaded.lines[0].id, 1000);
-  EXPECT_EQ(loaded.lines[0].p, 2.5);
-  EXPECT_EQ(loaded.lines[0].theta, -0.75);
-  EXPECT_EQ(loaded.lines[0].covariance[1], 1e-5);
-  EXPECT_EQ(loaded.lines[0].observations, 6);
-  ASSERT_EQ(loaded.line_angles.size(), 1u);
-  EXPECT_EQ(loaded.line_angles[0].id, 1001);
-  EXPECT_EQ(loaded.line_angles[0].theta, 1.25);
-  EXPECT_EQ(loaded.line_angles[0].variance, 2e-4);
+  expectAddedLines(observer_.map());
   std::remove(path);
 
   // Localisation only: iterations go on, the map never grows.
@@ -748,22 +805,7 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   EXPECT_LE(observer_.map().landmarks.size(), saved.landmarks.size());
   EXPECT_EQ(observer_.diagnosticText("localize only"), "True");
 
-  // Smooth: a smoothed path with one pose per scan since the load and a grid.
-  std_srvs::Trigger smooth;
-  ASSERT_TRUE(call("smooth", &smooth));
-  ASSERT_TRUE(smooth.response.success) << smooth.response.message;
-  EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() > 10; }, 3.0));
-  ASSERT_TRUE(waitFor([&] { return observer_.grid().info.width > 0; }, 3.0));
-  const nav_msgs::OccupancyGrid grid = observer_.grid();
-  EXPECT_EQ(grid.header.frame_id, "map");
-  EXPECT_NEAR(grid.info.resolution, 0.05, 1e-6);
-  int occupied = 0, free_cells = 0;
-  for (int8_t v : grid.data) {
-    occupied += v > 65;
-    free_cells += v >= 0 && v < 35;
-  }
-  EXPECT_GT(occupied, 50) << "the room's walls";
-  EXPECT_GT(free_cells, occupied) << "the room's inside";
+  expectSmoothedGrid();
 }
 
 double headingOf(const geometry_msgs::Quaternion& q);
@@ -872,20 +914,11 @@ TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
   };
 
   // Save while paused, after any grid in the making has been published.
-  ASSERT_TRUE(trigger("pause"));
-  ros::WallDuration(1.5).sleep();
-  const nav_msgs::OccupancyGrid shown = observer_.grid();
   char dir[] = "/tmp/slam_node_gridXXXXXX";
   ASSERT_NE(::mkdtemp(dir), nullptr);
   const std::string path = std::string(dir) + "/lab.yaml";
-  ekf_slam::SaveMap save;
-  save.request.path = path;
-  ASSERT_TRUE(call("save_map", &save));
-  ASSERT_TRUE(save.response.success) << save.response.message;
-  EXPECT_EQ(save.response.grid_path, std::string(dir) + "/lab_grid.yaml");
   GridMapFile file;
-  ASSERT_EQ(readGridMap(save.response.grid_path, &file), "");
-  EXPECT_TRUE(sameGrid(shown, file)) << "the saved grid is not the one on map";
+  ASSERT_NO_FATAL_FAILURE(saveShownGrid(path, std::string(dir) + "/lab_grid.yaml", &file));
 
   // Load at a pose 0.5 m off the truth, localisation only: the grid comes
   // back on map bit for bit, and the pose stays off.
@@ -896,10 +929,7 @@ TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
   load.request.path = path;
   load.request.localize_only = true;
   load.request.set_pose = true;
-  load.request.pose.pose.position.x = wrong.x;
-  load.request.pose.pose.position.y = wrong.y;
-  load.request.pose.pose.orientation.z = std::sin(0.5 * wrong.theta);
-  load.request.pose.pose.orientation.w = std::cos(0.5 * wrong.theta);
+  load.request.pose.pose = poseMessage(wrong);
   ASSERT_TRUE(call("load_map", &load));
   ASSERT_TRUE(load.response.success) << load.response.message;
   ASSERT_TRUE(waitFor([&] { return observer_.grids() > grids_at_load; }, 5.0));
@@ -921,14 +951,10 @@ TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
   ros::NodeHandle node;
   ros::Publisher initial_pose =
       node.advertise<geometry_msgs::PoseWithCovarianceStamped>("initialpose", 1, true);
-  const Pose2 truth = truthAt(ros::Time::now());
   geometry_msgs::PoseWithCovarianceStamped estimate;
   estimate.header.frame_id = "map";
   estimate.header.stamp = ros::Time::now();
-  estimate.pose.pose.position.x = truth.x;
-  estimate.pose.pose.position.y = truth.y;
-  estimate.pose.pose.orientation.z = std::sin(0.5 * truth.theta);
-  estimate.pose.pose.orientation.w = std::cos(0.5 * truth.theta);
+  estimate.pose.pose = poseMessage(truthAt(ros::Time::now()));
   estimate.pose.covariance[0] = estimate.pose.covariance[7] = 0.05 * 0.05;
   estimate.pose.covariance[35] = std::pow(degToRad(3.0), 2);
   initial_pose.publish(estimate);

@@ -1,20 +1,15 @@
-// ekf_slam_node's services: ~pause, ~resume, ~reset, ~save_map, ~load_map
-// and ~smooth.
-#include "ekf_slam_ros/slam_node/slam_node.h"
+#include "ekf_slam_ros/slam_node/slam_services.h"
 
 #include <nav_msgs/OccupancyGrid.h>
 #include <unistd.h>
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "ekf_slam_core/io/grid_map_file.h"
-#include "ekf_slam_core/mapping/occupancy_grid.h"
-#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
-#include "ekf_slam_ros/slam_node/slam_messages.h"
 #include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
@@ -67,22 +62,60 @@ std::vector<SlamPipeline::KeyScan> keysAtSmoothedPoses(std::vector<SlamPipeline:
   return moved;
 }
 
+std::string withoutLeadingSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
 }  // namespace
 
-bool SlamNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+SlamServices::SlamServices(ros::NodeHandle node, ros::NodeHandle private_node,
+                           const SlamNodeParams& params, const OccupancyGridOptions& map,
+                           SlamControl& slam, ScanOutputs& outputs, GridOutput& grids)
+    : params_(params), map_options_(map), slam_(slam), outputs_(outputs), grids_(grids) {
+  paused_ = params_.start_paused;
+  if (paused_) ROS_INFO("ekf_slam_node: started paused (start_paused): call ~resume to map");
+  services_.push_back(private_node.advertiseService("pause", &SlamServices::onPause, this));
+  services_.push_back(private_node.advertiseService("resume", &SlamServices::onResume, this));
+  services_.push_back(private_node.advertiseService("step", &SlamServices::onStep, this));
+  services_.push_back(private_node.advertiseService("reset", &SlamServices::onReset, this));
+  services_.push_back(private_node.advertiseService("smooth", &SlamServices::onSmooth, this));
+  services_.push_back(private_node.advertiseService("save_map", &SlamServices::onSaveMap, this));
+  services_.push_back(private_node.advertiseService("load_map", &SlamServices::onLoadMap, this));
+  initial_pose_subscriber_ = node.subscribe("initialpose", 2, &SlamServices::onInitialPose, this);
+}
+
+std_msgs::Header SlamServices::mapHeader() const {
+  std_msgs::Header header;
+  header.stamp = slam_.lastScanStamp();
+  header.frame_id = params_.map_frame;
+  return header;
+}
+
+void SlamServices::afterScan(const ros::Time& stamp, ScanOutcome outcome) {
+  if (!step_pending_) return;
+  // ~step: this was the one scan; pause until the next step.
+  step_pending_ = false;
+  paused_ = true;
+  ++steps_done_;
+  slam_.dropWaitingInputs();
+  ROS_INFO("ekf_slam_node: step %ld: scan at %.3f %s; paused", steps_done_, stamp.toSec(),
+           toString(outcome));
+}
+
+bool SlamServices::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
   paused_ = true;
   step_pending_ = false;
-  clearWaiting();
+  slam_.dropWaitingInputs();
   response.success = true;
   response.message = "paused: scans are dropped until resume";
   ROS_INFO("ekf_slam_node: %s", response.message.c_str());
   return true;
 }
 
-bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+bool SlamServices::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
   // Whatever the robot did while paused is one move, however large: the
   // next scan takes it as control instead of discarding it as a jump.
-  if (paused_ && pipeline_) pipeline_->acceptNextMotion();
+  if (paused_) slam_.acceptNextMotion();
   paused_ = false;
   step_pending_ = false;
   response.success = true;
@@ -91,8 +124,8 @@ bool SlamNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
   return true;
 }
 
-bool SlamNode::onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-  if (paused_ && pipeline_) pipeline_->acceptNextMotion();
+bool SlamServices::onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  if (paused_) slam_.acceptNextMotion();
   response.message =
       paused_ ? "one iteration on the next scan, then paused" : "pausing after the next scan";
   paused_ = false;
@@ -102,37 +135,27 @@ bool SlamNode::onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   return true;
 }
 
-bool SlamNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-  resetState();
-  seed_map_.reset();
-  start_pose_.reset();
-  node_grid_.reset();
-  hold_loaded_grid_ = false;
-  if (live_map_) live_map_->forget();
-  localize_only_ = params_.localize_only;
-  std_msgs::Header header;
-  header.stamp = last_scan_stamp_;
-  header.frame_id = params_.map_frame;
-  publishLandmarkMap(header);
-  path_.header.stamp = last_scan_stamp_;
-  path_publisher_.publish(path_);
+bool SlamServices::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  slam_.clearMap();
+  grids_.forget();
+  const std_msgs::Header header = mapHeader();
+  outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
+  outputs_.republishPath(header.stamp);
   response.success = true;
   response.message = "reset: empty map; the next scan starts a new one";
   ROS_INFO("ekf_slam_node: %s", response.message.c_str());
   return true;
 }
 
-bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
+bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
   if (request.path.empty()) {
     response.success = false;
     response.message = "path is empty";
     return true;
   }
   LandmarkMapFile map;
-  if (pipeline_) {
-    map = toLandmarkMapFile(pipeline_->filter(), lineSupport(), params_.map_frame);
-  } else if (seed_map_) {
-    map = *seed_map_;
+  if (std::optional<LandmarkMapFile> landmarks = slam_.landmarks()) {
+    map = std::move(*landmarks);
   } else {
     map.frame = params_.map_frame;
   }
@@ -142,7 +165,7 @@ bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response)
   const std::string grid_path = gridPathFor(request.path);
   nav_msgs::OccupancyGrid grid;
   std::string grid_note;
-  if (currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
+  if (grids_.currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
     const std::string error = writeGridMap(grid_path, ros_conversions::toGridMapFile(grid));
     if (!error.empty()) {
       response.success = false;
@@ -165,7 +188,7 @@ bool SlamNode::onSaveMap(SaveMap::Request& request, SaveMap::Response& response)
   return true;
 }
 
-bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
+bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
   response.success = false;
   response.landmarks = 0;
   auto refuse = [&](const std::string& problem) {
@@ -196,20 +219,14 @@ bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response)
   }
   // The filter restarts at the given pose (the map origin by default) with
   // the loaded landmarks as a prior, uncorrelated with the pose.
-  error = setStartPose(start, start_covariance);
+  error = slam_.restart(start, start_covariance, map, request.localize_only);
   if (!error.empty()) return refuse("pose: " + error);
-  resetState();
-  seed_map_ = map;
-  localize_only_ = request.localize_only;
-  if (laser_pose_) createPipeline(*laser_pose_);
-  std_msgs::Header header;
-  header.stamp = last_scan_stamp_;
-  header.frame_id = params_.map_frame;
-  publishLandmarkMap(header);
-  hold_loaded_grid_ = false;
+  const std_msgs::Header header = mapHeader();
+  outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
+  grids_.hold(false);
   if (grid) {
-    publishNodeGrid(ros_conversions::toOccupancyGridMessage(*grid, header));
-    hold_loaded_grid_ = localize_only_;  // mapping on: the live map takes over
+    grids_.publish(ros_conversions::toOccupancyGridMessage(*grid, header));
+    grids_.hold(slam_.localizeOnly());  // mapping on: the live map takes over
   }
   response.success = true;
   response.landmarks = static_cast<int>(map.size());
@@ -219,75 +236,56 @@ bool SlamNode::onLoadMap(LoadMap::Request& request, LoadMap::Response& response)
   text << landmarkCounts(map) << " loaded from " << request.path;
   if (grid) text << " and a " << grid->width << " x " << grid->height << " grid from " << grid_path;
   text << "; the robot starts at (" << start.x << ", " << start.y << ", " << radToDeg(start.theta)
-       << " deg)" << (localize_only_ ? "; localisation only" : "; mapping continues");
+       << " deg)" << (slam_.localizeOnly() ? "; localisation only" : "; mapping continues");
   response.message = text.str();
   ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
   return true;
 }
 
-std::string SlamNode::setStartPose(const Pose2& pose, const Matrix3& covariance) {
-  if (!pose.allFinite()) return "not finite";
-  const Matrix3 symmetric = 0.5 * (covariance + covariance.transpose());
-  if (!symmetric.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9) ||
-      Eigen::SelfAdjointEigenSolver<Matrix3>(symmetric).eigenvalues().minCoeff() < 0.0) {
-    return "the (x, y, yaw) covariance is not finite, symmetric and positive semi-definite";
+void SlamServices::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message) {
+  if (withoutLeadingSlash(message.header.frame_id) != params_.map_frame) {
+    ROS_WARN(
+        "ekf_slam_node: initialpose in frame '%s' ignored: it must be given in '%s' (set "
+        "rviz's fixed frame to it)",
+        message.header.frame_id.c_str(), params_.map_frame.c_str());
+    return;
   }
-  PipelineOptions options = config_.pipeline;
-  options.initial_pose = pose;
-  options.initial_pose_covariance = symmetric;
-  const std::string error = options.validate();
-  if (!error.empty()) return error;
-  start_pose_ = pose;
-  start_covariance_ = symmetric;
-  return "";
+  const Pose2 start = fromPoseMessage(message.pose.pose);
+  const Matrix3 covariance = ros_conversions::planarCovariance(message.pose.covariance);
+  // The landmarks mapped so far (or the map loaded and not yet used) stay,
+  // as the prior of the restarted filter.
+  const std::optional<LandmarkMapFile> prior = slam_.landmarks();
+  const std::string error = slam_.restart(start, covariance, prior, slam_.localizeOnly());
+  if (!error.empty()) {
+    ROS_WARN("ekf_slam_node: initialpose ignored: %s", error.c_str());
+    return;
+  }
+  ++relocalisations_;
+  ROS_INFO(
+      "ekf_slam_node: initialpose: the filter restarts at (%.3f m, %.3f m, %.1f deg), "
+      "sigma (%.3f m, %.3f m, %.1f deg), with %zu landmarks as its prior",
+      start.x, start.y, radToDeg(start.theta), std::sqrt(covariance(0, 0)),
+      std::sqrt(covariance(1, 1)), radToDeg(std::sqrt(covariance(2, 2))),
+      prior ? prior->landmarks.size() : size_t{0});
 }
 
-bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-  if (!pipeline_ || pipeline_->scans().empty()) {
+bool SlamServices::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  const SlamPipeline* pipeline = slam_.pipeline();
+  if (!pipeline || pipeline->scans().empty()) {
     response.success = false;
     response.message = "no scans processed yet";
     return true;
   }
   // With history_max_scans, the smoother covers the newest scans only.
-  const std::vector<StampedPose> smoothed = pipeline_->smoothedScanPoses();
-  std_msgs::Header header;
-  header.stamp = last_scan_stamp_;
-  header.frame_id = params_.map_frame;
+  const std::vector<StampedPose> smoothed = pipeline->smoothedScanPoses();
+  const std_msgs::Header header = mapHeader();
   nav_msgs::Path path;
   path.header = header;
-  auto addToPath = [&](double stamp, const Pose2& pose) {
-    geometry_msgs::PoseStamped p;
-    p.header.stamp = ros::Time(stamp);
-    p.header.frame_id = params_.map_frame;
-    p.pose = toPoseMessage(pose);
-    path.poses.push_back(p);
-  };
-  // With loop closure on, the grid is cast from the back end's key scans
-  // (the readings it keeps anyway) at their smoothed poses: the node keeps
-  // no ranges of its own, and its memory grows with the key scans only.
-  // Key scans older than the smoothed scans keep their loop-closed poses,
-  // and lead the path.
-  std::vector<SlamPipeline::KeyScan> keys;
-  if (stored_scans_.empty()) keys = keysAtSmoothedPoses(pipeline_->keyScans(true), smoothed);
+  OccupancyGrid grid(map_options_);
   long older_keys = 0;
-  for (const SlamPipeline::KeyScan& key : keys) {
-    if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
-    addToPath(key.stamp, key.pose);
-    ++older_keys;
-  }
-  // Without loop closure the stored scans are cast at their smoothed poses,
-  // over the grid of the scans older than them (history_grid_).
-  OccupancyGrid grid = history_grid_ ? *history_grid_ : OccupancyGrid(config_.map);
-  const long first_record = pipeline_->firstScan();
-  for (size_t i = 0; i < smoothed.size(); ++i) {
-    addToPath(smoothed[i].stamp, smoothed[i].pose);
-    const long stored = first_record + static_cast<long>(i) - stored_first_;
-    if (stored >= 0 && stored < static_cast<long>(stored_scans_.size())) {
-      grid.insertScan(compose(smoothed[i].pose, *laser_pose_), stored_scans_[stored].toScan());
-    }
-  }
-  smoothed_path_publisher_.publish(path);
-  if (stored_scans_.empty() && keys.empty()) {
+  const bool have_grid = smoothedGrid(*pipeline, smoothed, &path, &grid, &older_keys);
+  outputs_.publishSmoothedPath(path);
+  if (!have_grid) {
     // input: features: the node never saw the ranges a grid is cast from.
     response.success = true;
     response.message = "smoothed " + std::to_string(smoothed.size()) +
@@ -296,15 +294,13 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
     return true;
   }
-  if (!keys.empty()) grid = gridFromKeyScans(keys, *laser_pose_, config_.map);
-
-  publishNodeGrid(toOccupancyGridMessage(grid, header));
+  grids_.publish(toOccupancyGridMessage(grid, header));
 
   std::ostringstream text;
-  text << "smoothed " << smoothed.size() << " scan poses (" << pipeline_->counters().iterations
+  text << "smoothed " << smoothed.size() << " scan poses (" << pipeline->counters().iterations
        << " iterations";
-  if (pipeline_->firstScan() > 0) {
-    text << "; the newest " << smoothed.size() << " of " << pipeline_->recordedScans()
+  if (pipeline->firstScan() > 0) {
+    text << "; the newest " << smoothed.size() << " of " << pipeline->recordedScans()
          << " scans, history_max_scans";
     if (older_keys > 0) text << ", before them " << older_keys << " loop-closed key scans";
   }
@@ -313,6 +309,45 @@ bool SlamNode::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
   response.success = true;
   response.message = text.str();
   ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamServices::smoothedGrid(const SlamPipeline& pipeline,
+                                const std::vector<StampedPose>& smoothed, nav_msgs::Path* path,
+                                OccupancyGrid* grid, long* older_keys) const {
+  auto addToPath = [&](double stamp, const Pose2& pose) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = ros::Time(stamp);
+    p.header.frame_id = params_.map_frame;
+    p.pose = toPoseMessage(pose);
+    path->poses.push_back(p);
+  };
+  const Pose2 laser = pipeline.options().filter.laser_pose;
+  // With loop closure on, the grid is cast from the back end's key scans
+  // (the readings it keeps anyway) at their smoothed poses, and the history
+  // keeps no readings: memory grows with the key scans only. Key scans
+  // older than the smoothed scans keep their loop-closed poses, and lead
+  // the path.
+  const ScanHistory& history = pipeline.history();
+  std::vector<SlamPipeline::KeyScan> keys;
+  if (history.keptScans().empty()) keys = keysAtSmoothedPoses(pipeline.keyScans(true), smoothed);
+  for (const SlamPipeline::KeyScan& key : keys) {
+    if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
+    addToPath(key.stamp, key.pose);
+    ++*older_keys;
+  }
+  // Without loop closure the history's kept scans are cast at their
+  // smoothed poses, over its grid of the scans older than them.
+  if (history.leftScansGrid()) *grid = *history.leftScansGrid();
+  const long first_record = pipeline.firstScan();
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    addToPath(smoothed[i].stamp, smoothed[i].pose);
+    if (const KeptScan* kept = history.keptScan(first_record + static_cast<long>(i))) {
+      grid->insertScan(compose(smoothed[i].pose, laser), kept->toScan());
+    }
+  }
+  if (history.keptScans().empty() && keys.empty()) return false;
+  if (!keys.empty()) *grid = gridFromKeyScans(keys, laser, map_options_);
   return true;
 }
 

@@ -1,0 +1,77 @@
+// ekf_slam_node's services and rviz's initial pose: ~pause, ~resume, ~step
+// (the supervised step mode, thesis §3.4.3), ~reset, ~smooth, ~save_map,
+// ~load_map, and /initialpose. Each handler checks its request, asks the
+// SLAM state (SlamControl) for the change, and answers with what it did.
+//
+// Owns the service servers, the initial pose subscriber and the run state
+// they set: paused, a step pending, the counts of steps and restarts.
+#pragma once
+
+#include <ekf_slam/LoadMap.h>
+#include <ekf_slam/SaveMap.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/mapping/occupancy_grid.h"
+#include "ekf_slam_ros/slam_node/grid_output.h"
+#include "ekf_slam_ros/slam_node/scan_outputs.h"
+#include "ekf_slam_ros/slam_node/slam_control.h"
+#include "ekf_slam_ros/slam_node/slam_node_params.h"
+
+namespace ekf_slam {
+
+class SlamServices {
+ public:
+  // Advertises the services under `private_node`, subscribes to
+  // initialpose under `node`. Every reference must outlive the services.
+  SlamServices(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,
+               const OccupancyGridOptions& map, SlamControl& slam, ScanOutputs& outputs,
+               GridOutput& grids);
+
+  bool paused() const { return paused_; }
+  long steps() const { return steps_done_; }
+  long relocalisations() const { return relocalisations_; }
+  // After each processed scan: a pending ~step was that scan, so the node
+  // pauses again (the inputs waiting are dropped).
+  void afterScan(const ros::Time& stamp, ScanOutcome outcome);
+  // A new map: no step is pending.
+  void cancelStep() { step_pending_ = false; }
+
+ private:
+  bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  // One iteration on the next scan, then paused again; the move made while
+  // paused is control, not a jump.
+  bool onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
+  bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
+  // The filter restarts at the given pose, the current landmarks (or the
+  // loaded map) as its prior.
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);
+  // ~smooth's grid (the smoothed path is in `path`); false without one
+  // (input: features, or no key scan yet). `older_keys`: key scans older
+  // than the smoothed scans (a bounded history), at their loop-closed poses.
+  bool smoothedGrid(const SlamPipeline& pipeline, const std::vector<StampedPose>& smoothed,
+                    nav_msgs::Path* path, OccupancyGrid* grid, long* older_keys) const;
+  std_msgs::Header mapHeader() const;  // the map frame, at the last scan's stamp
+
+  const SlamNodeParams& params_;
+  OccupancyGridOptions map_options_;
+  SlamControl& slam_;
+  ScanOutputs& outputs_;
+  GridOutput& grids_;
+  std::vector<ros::ServiceServer> services_;
+  ros::Subscriber initial_pose_subscriber_;
+  bool paused_ = false;
+  bool step_pending_ = false;  // ~step: pause again after the next scan
+  long steps_done_ = 0;
+  long relocalisations_ = 0;  // /initialpose messages taken
+};
+
+}  // namespace ekf_slam
