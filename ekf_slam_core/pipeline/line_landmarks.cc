@@ -31,14 +31,6 @@ bool finiteLine(const LineFeature& line) {
          line.start.allFinite() && line.end.allFinite();
 }
 
-struct Candidate {
-  int observation = -1;
-  int landmark_id = -1;
-  LineMatch match;
-  double mahalanobis2 = 0.0;
-  double score = 0.0;  // d² + ln|S|
-};
-
 }  // namespace
 
 LineLandmarks::LineLandmarks(LandmarkKind kind, const LineLandmarkOptions& options,
@@ -125,99 +117,12 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
   LineIterationReport& report = *out;
   // The point step of this scan merged and pruned point landmarks.
   followEndpoints(filter, points.merged);
-
-  // The scan's point landmarks by feature index, for the segments' ends.
-  std::unordered_map<int, int> landmark_of_feature;
-  auto survivor = [&](int id) {
-    for (const auto& [kept, dropped] : points.merged) {
-      if (dropped == id) id = kept;
-    }
-    return id;
-  };
-  for (const PointMatch& m : points.matches) {
-    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
-  }
-  for (const PointMatch& m : points.created) {
-    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
-  }
-
-  // Gate the segments.
-  std::vector<Segment> segments;
-  for (int l = 0; l < static_cast<int>(features.lines.size()); ++l) {
-    const LineFeature& line = features.lines[l];
-    if (!finiteLine(line)) {
-      ++report.refused;
-      continue;
-    }
-    if (line.length() < options_.min_length ||
-        (0.5 * (line.start + line.end)).norm() > options_.max_range) {
-      continue;
-    }
-    LineObservation obs;
-    obs.z = {line.p, line.theta};
-    obs.covariance = line.covariance;
-    report.observations.push_back(obs);
-    report.observation_line.push_back(l);
-    segments.push_back(toMap(filter, line));
-  }
+  const std::unordered_map<int, int> landmark_of_feature =
+      pointLandmarksByFeature(points, observation_feature);
+  const std::vector<Segment> segments = gateSegments(filter, features, &report);
   const int count = static_cast<int>(report.observations.size());
-
-  // Individual compatibility with every overlapping landmark of our kind.
-  const double gate2 = chiSquareQuantile(association_.gate_probability, 2.0);
-  const double gate1 = chiSquareQuantile(association_.gate_probability, 1.0);
-  const double new_gate2 = chiSquareQuantile(association_.new_landmark_probability, 2.0);
-  const double new_gate1 = chiSquareQuantile(association_.new_landmark_probability, 1.0);
-  std::vector<Candidate> candidates;
   std::vector<char> near_new_gate(count, 0);
-  for (int i = 0; i < count; ++i) {
-    for (int slot = 0; slot < filter.landmarkCount(); ++slot) {
-      if (filter.landmarkKind(slot) != kind_) continue;
-      const int id = filter.landmarks()[slot].id;
-      const auto track = tracks_.find(id);
-      if (track == tracks_.end() || !overlaps(filter, slot, track->second, segments[i])) continue;
-      Candidate c;
-      c.observation = i;
-      c.landmark_id = id;
-      c.match.landmark_id = id;
-      if (kind_ == LandmarkKind::kLineAngle) {
-        std::copy(track->second.endpoint_ids, track->second.endpoint_ids + 2, c.match.endpoint_ids);
-      }
-      Eigen::VectorXd innovation;
-      Eigen::MatrixXd S;
-      FilterStatus status =
-          filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
-      if (status != FilterStatus::kOk && kind_ == LandmarkKind::kLineAngle) {
-        // Endpoints that no longer agree with the direction (θ_f beyond
-        // kMaxEndpointDisagreement from their line): the direction alone.
-        c.match.endpoint_ids[0] = c.match.endpoint_ids[1] = -1;
-        status = filter.predictLineMatch(report.observations[i], c.match, &innovation, &S);
-      }
-      if (status != FilterStatus::kOk) continue;
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
-      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
-      c.mahalanobis2 = innovation.dot(ldlt.solve(innovation));
-      double log_det = std::log(ldlt.vectorD().prod());
-      bool inside = c.mahalanobis2 <= (innovation.size() == 1 ? gate1 : gate2);
-      bool inside_new = c.mahalanobis2 <= (innovation.size() == 1 ? new_gate1 : new_gate2);
-      if (innovation.size() == 1) {
-        // θ alone: the offset from the latest sighting as a second row.
-        double offset_d2 = 0.0;
-        if (!offsetCompatible(filter, slot, track->second, report.observations[i], &offset_d2)) {
-          continue;
-        }
-        c.mahalanobis2 += offset_d2;
-        log_det += std::log(offsetVariance(filter, report.observations[i]) +
-                            track->second.latest_offset_variance);
-        inside = c.mahalanobis2 <= gate2;
-        inside_new = c.mahalanobis2 <= new_gate2;
-      }
-      if (inside_new) near_new_gate[i] = 1;
-      if (!inside) continue;
-      c.match.observation = i;
-      c.score = c.mahalanobis2 + log_det;
-      candidates.push_back(c);
-    }
-  }
+  std::vector<Candidate> candidates = candidatesOf(filter, segments, report, &near_new_gate);
 
   // Greedy nearest neighbour: best pairs first, one per segment and landmark.
   std::sort(candidates.begin(), candidates.end(),
@@ -239,51 +144,13 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
   for (const LineMatch& m : report.matches) {
     report.endpoint_matches += m.endpoint_ids[0] >= 0 || m.endpoint_ids[1] >= 0;
   }
-
-  // The point landmarks at each segment's two ends (θ-only landmarks).
-  auto endsOf = [&](int observation, int ends[2]) {
-    ends[0] = ends[1] = -1;
-    const int l = report.observation_line[observation];
-    const LineFeature& line = features.lines[l];
-    for (const auto& [feature, id] : landmark_of_feature) {
-      const PointFeature& point = features.points_of_interest[feature];
-      if (point.line != l && point.other_line != l) continue;
-      const bool at_start =
-          (point.position - line.start).norm() <= (point.position - line.end).norm();
-      ends[at_start ? 0 : 1] = id;
-    }
-  };
-  auto addEndpoints = [&](int id, const int ends[2]) {
-    Track& track = tracks_[id];
-    for (int k = 0; k < 2; ++k) {
-      const int e = ends[k];
-      if (e < 0 || filter.slotOf(e) < 0 || e == track.endpoint_ids[0] ||
-          e == track.endpoint_ids[1]) {
-        continue;
-      }
-      // Endpoints close together fix neither the offset nor the direction.
-      const int other = track.endpoint_ids[0] >= 0 ? track.endpoint_ids[0] : track.endpoint_ids[1];
-      if (other >= 0 && (filter.landmarkPosition(filter.slotOf(other)) -
-                         filter.landmarkPosition(filter.slotOf(e)))
-                                .norm() < options_.min_length) {
-        continue;
-      }
-      for (int& slot : track.endpoint_ids) {
-        if (slot < 0) {
-          slot = e;
-          break;
-        }
-      }
-    }
-  };
-
   for (const LineMatch& m : report.matches) {
     remember(filter, m.landmark_id, report.observations[m.observation],
              toMap(filter, features.lines[report.observation_line[m.observation]]), true);
     if (kind_ == LandmarkKind::kLineAngle) {
       int ends[2];
-      endsOf(m.observation, ends);
-      addEndpoints(m.landmark_id, ends);
+      segmentEnds(features, report.observation_line[m.observation], landmark_of_feature, ends);
+      addEndpoints(filter, m.landmark_id, ends);
     }
   }
   // Augment after the update so new landmarks hang off the corrected pose.
@@ -303,8 +170,166 @@ void LineLandmarks::observe(EkfSlam& filter, const FeatureSet& features,
              toMap(filter, features.lines[report.observation_line[i]]), false);
     if (kind_ == LandmarkKind::kLineAngle) {
       int ends[2];
-      endsOf(i, ends);
-      addEndpoints(id, ends);
+      segmentEnds(features, report.observation_line[i], landmark_of_feature, ends);
+      addEndpoints(filter, id, ends);
+    }
+  }
+}
+
+// The scan's point landmarks by feature index, following the scan's
+// merges, for the segments' ends.
+std::unordered_map<int, int> LineLandmarks::pointLandmarksByFeature(
+    const IterationReport& points, const std::vector<int>& observation_feature) {
+  std::unordered_map<int, int> landmark_of_feature;
+  auto survivor = [&](int id) {
+    for (const auto& [kept, dropped] : points.merged) {
+      if (dropped == id) id = kept;
+    }
+    return id;
+  };
+  for (const PointMatch& m : points.matches) {
+    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
+  }
+  for (const PointMatch& m : points.created) {
+    landmark_of_feature[observation_feature[m.observation]] = survivor(m.landmark_id);
+  }
+  return landmark_of_feature;
+}
+
+// The segments long and near enough to be used, as observations (into
+// `report`) and in the map frame (returned, same order).
+std::vector<LineLandmarks::Segment> LineLandmarks::gateSegments(const EkfSlam& filter,
+                                                                const FeatureSet& features,
+                                                                LineIterationReport* report) const {
+  std::vector<Segment> segments;
+  for (int l = 0; l < static_cast<int>(features.lines.size()); ++l) {
+    const LineFeature& line = features.lines[l];
+    if (!finiteLine(line)) {
+      ++report->refused;
+      continue;
+    }
+    if (line.length() < options_.min_length ||
+        (0.5 * (line.start + line.end)).norm() > options_.max_range) {
+      continue;
+    }
+    LineObservation obs;
+    obs.z = {line.p, line.theta};
+    obs.covariance = line.covariance;
+    report->observations.push_back(obs);
+    report->observation_line.push_back(l);
+    segments.push_back(toMap(filter, line));
+  }
+  return segments;
+}
+
+// Individual compatibility of every segment with every overlapping
+// landmark of this kind; `near_new_gate` marks the segments within some
+// landmark's new-landmark gate.
+std::vector<LineLandmarks::Candidate> LineLandmarks::candidatesOf(
+    const EkfSlam& filter, const std::vector<Segment>& segments, const LineIterationReport& report,
+    std::vector<char>* near_new_gate) const {
+  Gates gates;
+  gates.two = chiSquareQuantile(association_.gate_probability, 2.0);
+  gates.one = chiSquareQuantile(association_.gate_probability, 1.0);
+  gates.new_two = chiSquareQuantile(association_.new_landmark_probability, 2.0);
+  gates.new_one = chiSquareQuantile(association_.new_landmark_probability, 1.0);
+  std::vector<Candidate> candidates;
+  for (int i = 0; i < static_cast<int>(segments.size()); ++i) {
+    for (int slot = 0; slot < filter.landmarkCount(); ++slot) {
+      if (filter.landmarkKind(slot) != kind_) continue;
+      const auto track = tracks_.find(filter.landmarks()[slot].id);
+      if (track == tracks_.end() || !overlaps(filter, slot, track->second, segments[i])) continue;
+      Candidate c;
+      bool near_new = false;
+      const bool inside =
+          candidate(filter, i, slot, track->second, report.observations[i], gates, &c, &near_new);
+      if (near_new) (*near_new_gate)[i] = 1;
+      if (inside) candidates.push_back(c);
+    }
+  }
+  return candidates;
+}
+
+// Segment `observation` against the landmark in `slot`: true when inside
+// the gate (`c` then the candidate); `near_new` when inside the
+// new-landmark gate.
+bool LineLandmarks::candidate(const EkfSlam& filter, int observation, int slot, const Track& track,
+                              const LineObservation& obs, const Gates& gates, Candidate* out,
+                              bool* near_new) const {
+  Candidate& c = *out;
+  const int id = filter.landmarks()[slot].id;
+  c.observation = observation;
+  c.landmark_id = id;
+  c.match.landmark_id = id;
+  if (kind_ == LandmarkKind::kLineAngle) {
+    std::copy(track.endpoint_ids, track.endpoint_ids + 2, c.match.endpoint_ids);
+  }
+  Eigen::VectorXd innovation;
+  Eigen::MatrixXd S;
+  FilterStatus status = filter.predictLineMatch(obs, c.match, &innovation, &S);
+  if (status != FilterStatus::kOk && kind_ == LandmarkKind::kLineAngle) {
+    // Endpoints that no longer agree with the direction (θ_f beyond
+    // kMaxEndpointDisagreement from their line): the direction alone.
+    c.match.endpoint_ids[0] = c.match.endpoint_ids[1] = -1;
+    status = filter.predictLineMatch(obs, c.match, &innovation, &S);
+  }
+  if (status != FilterStatus::kOk) return false;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  c.mahalanobis2 = innovation.dot(ldlt.solve(innovation));
+  double log_det = std::log(ldlt.vectorD().prod());
+  bool inside = c.mahalanobis2 <= (innovation.size() == 1 ? gates.one : gates.two);
+  bool inside_new = c.mahalanobis2 <= (innovation.size() == 1 ? gates.new_one : gates.new_two);
+  if (innovation.size() == 1) {
+    // θ alone: the offset from the latest sighting as a second row.
+    double offset_d2 = 0.0;
+    if (!offsetCompatible(filter, slot, track, obs, &offset_d2)) return false;
+    c.mahalanobis2 += offset_d2;
+    log_det += std::log(offsetVariance(filter, obs) + track.latest_offset_variance);
+    inside = c.mahalanobis2 <= gates.two;
+    inside_new = c.mahalanobis2 <= gates.new_two;
+  }
+  *near_new = inside_new;
+  if (!inside) return false;
+  c.match.observation = observation;
+  c.score = c.mahalanobis2 + log_det;
+  return true;
+}
+
+// The point landmarks at the two ends of segment `line` (θ-only landmarks).
+void LineLandmarks::segmentEnds(const FeatureSet& features, int l,
+                                const std::unordered_map<int, int>& landmark_of_feature,
+                                int ends[2]) const {
+  ends[0] = ends[1] = -1;
+  const LineFeature& line = features.lines[l];
+  for (const auto& [feature, id] : landmark_of_feature) {
+    const PointFeature& point = features.points_of_interest[feature];
+    if (point.line != l && point.other_line != l) continue;
+    const bool at_start =
+        (point.position - line.start).norm() <= (point.position - line.end).norm();
+    ends[at_start ? 0 : 1] = id;
+  }
+}
+
+void LineLandmarks::addEndpoints(const EkfSlam& filter, int id, const int ends[2]) {
+  Track& track = tracks_[id];
+  for (int k = 0; k < 2; ++k) {
+    const int e = ends[k];
+    if (e < 0 || filter.slotOf(e) < 0 || e == track.endpoint_ids[0] || e == track.endpoint_ids[1]) {
+      continue;
+    }
+    // Endpoints close together fix neither the offset nor the direction.
+    const int other = track.endpoint_ids[0] >= 0 ? track.endpoint_ids[0] : track.endpoint_ids[1];
+    if (other >= 0 &&
+        (filter.landmarkPosition(filter.slotOf(other)) - filter.landmarkPosition(filter.slotOf(e)))
+                .norm() < options_.min_length) {
+      continue;
+    }
+    for (int& slot : track.endpoint_ids) {
+      if (slot < 0) {
+        slot = e;
+        break;
+      }
     }
   }
 }

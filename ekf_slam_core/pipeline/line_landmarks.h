@@ -132,6 +132,31 @@ class LineLandmarks {
   struct Segment {
     Vector2 a, b;  // map frame
   };
+  struct Candidate {
+    int observation = -1;
+    int landmark_id = -1;
+    LineMatch match;
+    double mahalanobis2 = 0.0;
+    double score = 0.0;  // d² + ln|S|
+  };
+  struct Gates {  // χ² quantiles: association (1 and 2 rows), new landmark
+    double one = 0.0, two = 0.0, new_one = 0.0, new_two = 0.0;
+  };
+
+  // The steps of observe().
+  static std::unordered_map<int, int> pointLandmarksByFeature(
+      const IterationReport& points, const std::vector<int>& observation_feature);
+  std::vector<Segment> gateSegments(const EkfSlam& filter, const FeatureSet& features,
+                                    LineIterationReport* report) const;
+  std::vector<Candidate> candidatesOf(const EkfSlam& filter, const std::vector<Segment>& segments,
+                                      const LineIterationReport& report,
+                                      std::vector<char>* near_new_gate) const;
+  bool candidate(const EkfSlam& filter, int observation, int slot, const Track& track,
+                 const LineObservation& obs, const Gates& gates, Candidate* out,
+                 bool* near_new) const;
+  void segmentEnds(const FeatureSet& features, int line,
+                   const std::unordered_map<int, int>& landmark_of_feature, int ends[2]) const;
+  void addEndpoints(const EkfSlam& filter, int id, const int ends[2]);
 
   Segment toMap(const EkfSlam& filter, const LineFeature& line) const;
   double landmarkTheta(const EkfSlam& filter, int slot) const;
