@@ -132,8 +132,8 @@ struct Kernels {
   ceres::HuberLoss huber;
 };
 
-// The problems, built once for the reference solver (ceres_reference.cc)
-// and the solver comparison alike. Each unknown is an array (pose: x, y, θ; landmark: x, y)
+// The problems, built once for the pipeline (ceres_solve.cc) and the solver
+// comparison alike. Each unknown is an array (pose: x, y, θ; landmark: x, y)
 // the caller fills with the start and reads back; loss functions come from
 // `kernels` (the problem must not own them: DO_NOT_TAKE_OWNERSHIP).
 // Every active edge of `graph`; node 0 held constant.

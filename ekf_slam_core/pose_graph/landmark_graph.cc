@@ -212,6 +212,7 @@ class NormalEquations {
 }  // namespace
 
 LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options) {
+  if (options.solver == "ceres") return optimizeWithCeres(options);
   LandmarkGraphSummary summary;
   const double c = options.kernel_width;
   summary.initial_cost = summary.final_cost = cost(c);
@@ -314,11 +315,7 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
     const bool improved = step.improved;
     const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
-    if (!improved) {
-      summary.stalled = true;
-      break;
-    }
-    if (largest_step < options.convergence_step ||
+    if (!improved || largest_step < options.convergence_step ||
         cost_before - summary.final_cost < options.min_relative_decrease * summary.final_cost) {
       summary.converged = true;
       break;

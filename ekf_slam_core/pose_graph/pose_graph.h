@@ -16,10 +16,8 @@
 // Levenberg-Marquardt step solves the sparse normal equations
 //   (H + λ diag(H)) δ = −Σ w Jᵀ Ω e,   H = Σ w Jᵀ Ω J
 // (Marquardt's scaling: each unknown is damped relative to its own
-// curvature, so metres and radians need no common unit) with a simplicial
-// LDLᵀ factorisation (Eigen), and is kept only when the robust cost
-// decreases (levenberg_marquardt.h). Ceres solves the same problems as the
-// tests' reference (ceres_reference.h).
+// curvature) with a simplicial LDLᵀ factorisation (Eigen), and is kept only
+// when the robust cost decreases (levenberg_marquardt.h).
 #pragma once
 
 #include <string>
@@ -40,6 +38,11 @@ struct PoseGraphEdge {
 };
 
 struct PoseGraphOptions {
+  // levenberg_marquardt: the hand-written solver described above; ceres:
+  // Ceres's Levenberg–Marquardt (ceres_solve.cc; it stops once a step lowers
+  // the cost by less than 1e-6 of it, convergence_step unused). Why the
+  // default is not Ceres: docs/solvers.md.
+  std::string solver = "levenberg_marquardt";
   int max_iterations = 20;         // Levenberg-Marquardt steps per optimize()
   double convergence_step = 1e-6;  // m or rad: a smaller largest step component ends it
   double robust_kernel_width =
@@ -48,6 +51,7 @@ struct PoseGraphOptions {
 
   template <class Visitor>
   void visitFields(Visitor& v) {
+    v.text("solver", solver, {"ceres", "levenberg_marquardt"});
     v.integer("max_iterations", max_iterations, Bounds::closed(1, 10000));
     v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
     v.number("robust_kernel_width", robust_kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
@@ -61,11 +65,7 @@ struct PoseGraphSummary {
   int iterations = 0;
   double initial_cost = 0.0;  // robust cost before and after
   double final_cost = 0.0;
-  // The last step moved no unknown by more than convergence_step.
   bool converged = false;
-  // No damped step lowered the cost (λ raised ten times): the solve ended
-  // there, not converged.
-  bool stalled = false;
 };
 
 // The error of one edge at the given poses, with optional Jacobians (3×3
@@ -87,8 +87,6 @@ class PoseGraph {
   void setEdgeActive(int edge, bool active) { edges_[edge].active = active; }
   void setEdgeRobust(int edge, bool robust) { edges_[edge].robust = robust; }
 
-  // Robust cost Σ ρ(eᵀ Ω e) at the current poses.
-  double cost(double kernel_width) const { return cost(poses_, kernel_width); }
   // Squared Mahalanobis error eᵀ Ω e of an edge at the current poses.
   double edgeChi2(int edge) const;
   // Its kernel weight (1 for a non-robust edge).
@@ -99,6 +97,7 @@ class PoseGraph {
 
  private:
   double cost(const std::vector<Pose2>& poses, double kernel_width) const;
+  PoseGraphSummary optimizeWithCeres(const PoseGraphOptions& options);  // ceres_solve.cc
 
   std::vector<Pose2> poses_;
   std::vector<PoseGraphEdge> edges_;

@@ -1,8 +1,8 @@
-// The reference solutions of the tests and the solver comparison: Ceres's
-// Levenberg–Marquardt trust region over the cost functions of
-// ceres_costs.h, sparse Cholesky of the normal equations, one thread.
-#include "ekf_slam_core/pose_graph/ceres_reference.h"
-
+// PoseGraph::optimize and LandmarkGraph::optimize with Ceres (options
+// solver: ceres): Levenberg–Marquardt trust region over the cost functions
+// of ceres_costs.h, sparse Cholesky of the normal equations, one thread.
+// docs/solvers.md compares it with the hand-written solver on the real
+// logs' problems.
 #include <ceres/ceres.h>
 #include <ceres/version.h>
 
@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "ekf_slam_core/pose_graph/ceres_costs.h"
+#include "ekf_slam_core/pose_graph/landmark_graph.h"
+#include "ekf_slam_core/pose_graph/pose_graph.h"
 
 namespace ekf_slam {
 namespace {
@@ -98,20 +100,18 @@ void addLandmarkGraph(const LandmarkGraph& graph, Kernels* kernels,
 
 }  // namespace ceres_costs
 
-PoseGraphSummary solveWithCeres(const PoseGraphOptions& options, PoseGraph* graph) {
+PoseGraphSummary PoseGraph::optimizeWithCeres(const PoseGraphOptions& options) {
   PoseGraphSummary summary;
-  summary.initial_cost = summary.final_cost = graph->cost(options.robust_kernel_width);
-  const std::vector<Pose2>& start_poses = graph->poses();
-  if (graph->nodeCount() <= 1) {
+  summary.initial_cost = summary.final_cost = cost(poses_, options.robust_kernel_width);
+  if (nodeCount() <= 1) {
     summary.converged = true;
     return summary;
   }
-  std::vector<std::array<double, 3>> x(start_poses.size());
-  for (size_t i = 0; i < start_poses.size(); ++i)
-    x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
+  std::vector<std::array<double, 3>> x(poses_.size());
+  for (size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
   ceres_costs::Kernels kernels(options.robust_kernel_width);
   ceres::Problem problem(problemOptions());
-  ceres_costs::addPoseGraph(*graph, &kernels, &x, &problem);
+  ceres_costs::addPoseGraph(*this, &kernels, &x, &problem);
   if (problem.NumResidualBlocks() == 0) {
     summary.converged = true;
     return summary;
@@ -120,29 +120,24 @@ PoseGraphSummary solveWithCeres(const PoseGraphOptions& options, PoseGraph* grap
   // Ceres's own stop: a step lowering the cost by less than 1e-6 of it.
   ceres::Solve(solverOptions(options.max_iterations, 1e-6, options.initial_lambda), &problem,
                &result);
-  for (size_t i = 1; i < x.size(); ++i) {
-    graph->setPose(static_cast<int>(i), Pose2(x[i][0], x[i][1], wrapAngle(x[i][2])));
-  }
+  for (size_t i = 1; i < poses_.size(); ++i)
+    poses_[i] = Pose2(x[i][0], x[i][1], wrapAngle(x[i][2]));
   summary.iterations = stepsOf(result);
-  summary.final_cost = graph->cost(options.robust_kernel_width);
+  summary.final_cost = cost(poses_, options.robust_kernel_width);
   summary.converged = result.termination_type == ceres::CONVERGENCE;
   return summary;
 }
 
-LandmarkGraphSummary solveWithCeres(const LandmarkGraphOptions& options, LandmarkGraph* graph) {
+LandmarkGraphSummary LandmarkGraph::optimizeWithCeres(const LandmarkGraphOptions& options) {
   LandmarkGraphSummary summary;
-  summary.initial_cost = summary.final_cost = graph->cost(options.kernel_width);
-  const std::vector<Pose2>& start_poses = graph->poses();
-  const std::vector<Vector2>& start_landmarks = graph->landmarks();
-  std::vector<std::array<double, 3>> x(start_poses.size());
-  std::vector<std::array<double, 2>> m(start_landmarks.size());
-  for (size_t i = 0; i < start_poses.size(); ++i)
-    x[i] = {start_poses[i].x, start_poses[i].y, start_poses[i].theta};
-  for (size_t j = 0; j < start_landmarks.size(); ++j)
-    m[j] = {start_landmarks[j].x(), start_landmarks[j].y()};
+  summary.initial_cost = summary.final_cost = cost(options.kernel_width);
+  std::vector<std::array<double, 3>> x(poses_.size());
+  std::vector<std::array<double, 2>> m(landmarks_.size());
+  for (size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
+  for (size_t j = 0; j < landmarks_.size(); ++j) m[j] = {landmarks_[j].x(), landmarks_[j].y()};
   ceres_costs::Kernels kernels(options.kernel_width);
   ceres::Problem problem(problemOptions());
-  ceres_costs::addLandmarkGraph(*graph, &kernels, &x, &m, &problem);
+  ceres_costs::addLandmarkGraph(*this, &kernels, &x, &m, &problem);
   bool free_unknowns = false;
   for (auto& pose : x) {
     free_unknowns |=
@@ -157,17 +152,13 @@ LandmarkGraphSummary solveWithCeres(const LandmarkGraphOptions& options, Landmar
   ceres::Solve(
       solverOptions(options.max_iterations, options.min_relative_decrease, options.initial_lambda),
       &problem, &result);
-  for (size_t i = 0; i < x.size(); ++i) {
-    if (!graph->isFixed(static_cast<int>(i))) {
-      graph->setPose(static_cast<int>(i), Pose2(x[i][0], x[i][1], wrapAngle(x[i][2])));
-    }
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    if (!fixed_[i]) poses_[i] = Pose2(x[i][0], x[i][1], wrapAngle(x[i][2]));
   }
-  for (size_t j = 0; j < m.size(); ++j) {
-    graph->setLandmark(static_cast<int>(j), Vector2(m[j][0], m[j][1]));
-  }
+  for (size_t j = 0; j < landmarks_.size(); ++j) landmarks_[j] = Vector2(m[j][0], m[j][1]);
   summary.iterations = stepsOf(result);
   summary.symbolic_analyses = 1;
-  summary.final_cost = graph->cost(options.kernel_width);
+  summary.final_cost = cost(options.kernel_width);
   summary.converged = result.termination_type == ceres::CONVERGENCE;
   return summary;
 }
