@@ -1,12 +1,9 @@
 # Read by find_package(ekf_slam) (catkin_package CFG_EXTRAS), in the
 # development and the install space alike. The core's libraries are static,
-# so what they link reaches their users' link lines: Ceres (the solve through
-# Ceres, PRIVATE in ekf_slam_pose_graph, with its own dependencies: glog,
-# SuiteSparse, BLAS), the threads of the back end, and Eigen, whose headers
-# the core's headers include. They follow the core's libraries in
+# so what they link reaches their users' link lines: the threads of the back
+# end, and Eigen, whose headers the core's headers include. They follow the core's libraries in
 # ekf_slam_LIBRARIES, which lists those users first.
 find_package(Eigen3 REQUIRED NO_MODULE)
-find_package(Ceres 2.1 REQUIRED)
 find_package(Threads REQUIRED)
 list(APPEND ekf_slam_INCLUDE_DIRS ${EIGEN3_INCLUDE_DIRS})
-list(APPEND ekf_slam_LIBRARIES Ceres::ceres Threads::Threads Eigen3::Eigen)
+list(APPEND ekf_slam_LIBRARIES Threads::Threads Eigen3::Eigen)

@@ -212,7 +212,6 @@ class NormalEquations {
 }  // namespace
 
 LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options) {
-  if (options.solver == "ceres") return optimizeWithCeres(options);
   LandmarkGraphSummary summary;
   const double c = options.kernel_width;
   summary.initial_cost = summary.final_cost = cost(c);
@@ -230,11 +229,11 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
   unknowns += 2 * landmarkCount();
   auto landmarkOffset = [&](int j) { return landmark_start + 2 * j; };
   if (unknowns == 0) {
-    summary.converged = true;
+    summary.end = SolveEnd::kConverged;
     return summary;
   }
 
-  double lambda = options.initial_lambda;
+  Damping damping(options.initial_lambda);
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   bool pattern_known = false;
   AssemblyPattern pattern;
@@ -292,11 +291,12 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
     }
 
     const double cost_before = summary.final_cost;
+    std::vector<Pose2> poses;
+    std::vector<Vector2> landmarks;
     const DampedStep step = levenbergMarquardtStep(
-        H, normal->gradient(), options.initial_lambda, &lambda, &solver,
-        [&](const Eigen::VectorXd& delta) {
-          std::vector<Pose2> poses = poses_;
-          std::vector<Vector2> landmarks = landmarks_;
+        H, normal->gradient(), cost_before, &damping, &solver, [&](const Eigen::VectorXd& delta) {
+          poses = poses_;
+          landmarks = landmarks_;
           for (int i = 0; i < poseCount(); ++i) {
             if (pose_offset[i] >= 0) {
               poses[i] = Pose2::fromVector(poses_[i].vector() + delta.segment<3>(pose_offset[i]));
@@ -305,19 +305,19 @@ LandmarkGraphSummary LandmarkGraph::optimize(const LandmarkGraphOptions& options
           for (int j = 0; j < landmarkCount(); ++j) {
             landmarks[j] += delta.segment<2>(landmarkOffset(j));
           }
-          const double new_cost = cost(poses, landmarks, c);
-          if (new_cost > summary.final_cost) return false;
-          poses_ = std::move(poses);
-          landmarks_ = std::move(landmarks);
-          summary.final_cost = new_cost;
-          return true;
+          return cost(poses, landmarks, c);
         });
-    const bool improved = step.improved;
-    const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
-    if (!improved || largest_step < options.convergence_step ||
+    if (!step.improved) {
+      summary.end = step.at_minimum ? SolveEnd::kConverged : SolveEnd::kStalled;
+      break;
+    }
+    poses_ = std::move(poses);
+    landmarks_ = std::move(landmarks);
+    summary.final_cost = step.cost;
+    if (step.largest_step < options.convergence_step ||
         cost_before - summary.final_cost < options.min_relative_decrease * summary.final_cost) {
-      summary.converged = true;
+      summary.end = SolveEnd::kConverged;
       break;
     }
   }

@@ -16,8 +16,10 @@
 // the ones marked robust, handled by iteratively reweighted least squares
 // (weight ρ'(s) frozen per step). Each Levenberg–Marquardt step solves
 //   (Σ w Jᵀ Ω J + λ diag) δ = −Σ w Jᵀ Ω e
-// with a sparse LDLᵀ (Eigen, AMD ordering) and is kept only when the robust
-// cost does not increase.
+// with a sparse LDLᵀ (Eigen, AMD ordering), is kept only when the robust
+// cost does not increase, and λ follows the gain ratio (levenberg_marquardt.h).
+// A solve ends when the largest step component or the relative decrease
+// falls below its tolerance.
 #pragma once
 
 #include <string>
@@ -55,11 +57,6 @@ struct ObservationEdge {
 };
 
 struct LandmarkGraphOptions {
-  // levenberg_marquardt: the hand-written solver described above; ceres:
-  // Ceres's Levenberg–Marquardt (ceres_solve.cc; min_relative_decrease is its
-  // function tolerance, convergence_step unused). Why the default is not
-  // Ceres: docs/solvers.md.
-  std::string solver = "levenberg_marquardt";
   int max_iterations = 100;        // Levenberg–Marquardt steps
   double convergence_step = 1e-6;  // m or rad: a smaller largest step component ends it
   // A step that lowers the cost by less than this fraction ends it too.
@@ -69,7 +66,6 @@ struct LandmarkGraphOptions {
 
   template <class Visitor>
   void visitFields(Visitor& v) {
-    v.text("solver", solver, {"ceres", "levenberg_marquardt"});
     v.number("kernel_width", kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
     v.integer("max_iterations", max_iterations, Bounds::closed(1, 100000));
     v.number("min_relative_decrease", min_relative_decrease, Bounds::closed(0.0, 1.0));
@@ -87,7 +83,8 @@ struct LandmarkGraphSummary {
   int symbolic_analyses = 0;
   double initial_cost = 0.0;
   double final_cost = 0.0;
-  bool converged = false;
+  SolveEnd end = SolveEnd::kIterationLimit;
+  bool converged() const { return end == SolveEnd::kConverged; }
 };
 
 // Edge errors with optional Jacobians (additive (x, y, θ) / (x, y) convention).
@@ -130,7 +127,6 @@ class LandmarkGraph {
  private:
   double cost(const std::vector<Pose2>& poses, const std::vector<Vector2>& landmarks,
               double kernel_width) const;
-  LandmarkGraphSummary optimizeWithCeres(const LandmarkGraphOptions& options);  // ceres_solve.cc
 
   Pose2 laser_;
   std::vector<Pose2> poses_;

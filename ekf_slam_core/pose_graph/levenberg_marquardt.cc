@@ -33,32 +33,75 @@ double robustWeight(RobustKernel kernel, double s, double c) {
   return 1.0;
 }
 
+const char* solveEndName(SolveEnd end) {
+  switch (end) {
+    case SolveEnd::kConverged:
+      return "converged";
+    case SolveEnd::kStalled:
+      return "stalled";
+    case SolveEnd::kIterationLimit:
+      return "iteration limit";
+  }
+  return "?";
+}
+
+namespace {
+
+// λ stays within these: below, the step is Gauss–Newton's to rounding;
+// above, it is a vanishing gradient step.
+constexpr double kMinLambda = 1e-12;
+constexpr double kMaxLambda = 1e12;
+constexpr int kTries = 10;
+// A decrease below this fraction of the cost is lost in the rounding of a
+// sum of many terms: a model that predicts no more stands at the minimum.
+constexpr double kRounding = 1e-12;
+
+}  // namespace
+
 DampedStep levenbergMarquardtStep(const Eigen::SparseMatrix<double>& H,
-                                  const Eigen::VectorXd& gradient, double initial_lambda,
-                                  double* lambda,
+                                  const Eigen::VectorXd& gradient, double cost, Damping* damping,
                                   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>* solver,
-                                  const std::function<bool(const Eigen::VectorXd&)>& take) {
+                                  const std::function<double(const Eigen::VectorXd&)>& trial) {
   DampedStep result;
+  result.cost = cost;
   const Eigen::VectorXd diagonal = H.diagonal();
-  for (int attempt = 0; attempt < 10 && !result.improved; ++attempt) {
-    Eigen::SparseMatrix<double> damped = H;
+  auto refuse = [&] {
+    damping->lambda = std::min(kMaxLambda, damping->lambda * damping->raise);
+    damping->raise *= 2.0;
+  };
+  for (int attempt = 0; attempt < kTries; ++attempt) {
+    // What the damping adds to H: λ D, and 1 where H's diagonal is empty.
+    Eigen::VectorXd added(H.rows());
     for (int k = 0; k < H.rows(); ++k) {
-      damped.coeffRef(k, k) += *lambda * diagonal(k) + (diagonal(k) > 0.0 ? 0.0 : 1.0);
+      added(k) = diagonal(k) > 0.0 ? damping->lambda * diagonal(k) : 1.0;
     }
+    Eigen::SparseMatrix<double> damped = H;
+    for (int k = 0; k < H.rows(); ++k) damped.coeffRef(k, k) += added(k);
     solver->factorize(damped);
     if (solver->info() != Eigen::Success) {
-      *lambda = std::max(1e-6, *lambda * 10.0);
+      refuse();
       continue;
     }
     const Eigen::VectorXd step = solver->solve(-gradient);
     if (!step.allFinite()) break;
-    if (take(step)) {
-      result.improved = true;
-      result.largest_step = step.cwiseAbs().maxCoeff();
-      *lambda = std::max(initial_lambda, *lambda * 0.1);
-    } else {
-      *lambda = std::max(1e-6, *lambda * 10.0);
+    // (H + λD) δ = −g gives δᵀHδ = −gᵀδ − δᵀ(λD)δ, so the model's decrease
+    // −(2gᵀδ + δᵀHδ) is −gᵀδ + δᵀ(λD)δ.
+    const double predicted = -gradient.dot(step) + step.dot(added.cwiseProduct(step));
+    if (attempt == 0) result.at_minimum = predicted <= kRounding * std::abs(cost);
+    const double new_cost = trial(step);
+    if (!(new_cost <= cost)) {  // a NaN cost is refused too
+      refuse();
+      continue;
     }
+    const double gain = predicted > 0.0 ? (cost - new_cost) / predicted : 0.0;
+    const double shrink = std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * gain - 1.0, 3));
+    damping->lambda = std::clamp(damping->lambda * shrink, kMinLambda, kMaxLambda);
+    damping->raise = 2.0;
+    result.improved = true;
+    result.at_minimum = false;
+    result.largest_step = step.cwiseAbs().maxCoeff();
+    result.cost = new_cost;
+    break;
   }
   return result;
 }

@@ -77,16 +77,15 @@ double PoseGraph::cost(const std::vector<Pose2>& poses, double kernel_width) con
 }
 
 PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
-  if (options.solver == "ceres") return optimizeWithCeres(options);
   PoseGraphSummary summary;
   const double c = options.robust_kernel_width;
   summary.initial_cost = summary.final_cost = cost(poses_, c);
   const int unknowns = 3 * (nodeCount() - 1);
   if (unknowns <= 0) {
-    summary.converged = true;
+    summary.end = SolveEnd::kConverged;
     return summary;
   }
-  double lambda = options.initial_lambda;
+  Damping damping(options.initial_lambda);
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   std::vector<Eigen::Triplet<double>> triplets;
   // The edges, and so H's pattern, stay the same through the iterations.
@@ -118,25 +117,26 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
       analysed = true;
     }
 
-    // Levenberg-Marquardt: raise the damping until a step lowers the cost.
+    // Levenberg-Marquardt: a step that does not raise the cost, or none.
+    std::vector<Pose2> candidate;
     const DampedStep step = levenbergMarquardtStep(
-        H, b, options.initial_lambda, &lambda, &solver, [&](const Eigen::VectorXd& delta) {
-          std::vector<Pose2> candidate = poses_;
+        H, b, summary.final_cost, &damping, &solver, [&](const Eigen::VectorXd& delta) {
+          candidate = poses_;
           for (int node = 1; node < nodeCount(); ++node) {
             candidate[node] =
                 Pose2::fromVector(poses_[node].vector() + delta.segment<3>(unknownIndex(node)));
           }
-          const double new_cost = cost(candidate, c);
-          if (new_cost > summary.final_cost) return false;
-          poses_ = std::move(candidate);
-          summary.final_cost = new_cost;
-          return true;
+          return cost(candidate, c);
         });
-    const bool improved = step.improved;
-    const double largest_step = step.largest_step;
     summary.iterations = iteration + 1;
-    if (!improved || largest_step < options.convergence_step) {
-      summary.converged = true;  // no step lowers the cost any more: a minimum
+    if (!step.improved) {
+      summary.end = step.at_minimum ? SolveEnd::kConverged : SolveEnd::kStalled;
+      break;
+    }
+    poses_ = std::move(candidate);
+    summary.final_cost = step.cost;
+    if (step.largest_step < options.convergence_step) {
+      summary.end = SolveEnd::kConverged;
       break;
     }
   }

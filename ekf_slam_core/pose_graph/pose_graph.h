@@ -16,8 +16,9 @@
 // Levenberg-Marquardt step solves the sparse normal equations
 //   (H + λ diag(H)) δ = −Σ w Jᵀ Ω e,   H = Σ w Jᵀ Ω J
 // (Marquardt's scaling: each unknown is damped relative to its own
-// curvature) with a simplicial LDLᵀ factorisation (Eigen), and is kept only
-// when the robust cost decreases (levenberg_marquardt.h).
+// curvature) with a simplicial LDLᵀ factorisation (Eigen), is kept only
+// when the robust cost does not rise, and λ follows the gain ratio
+// (levenberg_marquardt.h).
 #pragma once
 
 #include <string>
@@ -25,6 +26,7 @@
 
 #include "ekf_slam_core/geometry/option_fields.h"
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/pose_graph/levenberg_marquardt.h"
 
 namespace ekf_slam {
 
@@ -38,11 +40,6 @@ struct PoseGraphEdge {
 };
 
 struct PoseGraphOptions {
-  // levenberg_marquardt: the hand-written solver described above; ceres:
-  // Ceres's Levenberg–Marquardt (ceres_solve.cc; it stops once a step lowers
-  // the cost by less than 1e-6 of it, convergence_step unused). Why the
-  // default is not Ceres: docs/solvers.md.
-  std::string solver = "levenberg_marquardt";
   int max_iterations = 20;         // Levenberg-Marquardt steps per optimize()
   double convergence_step = 1e-6;  // m or rad: a smaller largest step component ends it
   double robust_kernel_width =
@@ -51,7 +48,6 @@ struct PoseGraphOptions {
 
   template <class Visitor>
   void visitFields(Visitor& v) {
-    v.text("solver", solver, {"ceres", "levenberg_marquardt"});
     v.integer("max_iterations", max_iterations, Bounds::closed(1, 10000));
     v.number("convergence_step", convergence_step, Bounds::openClosed(0.0, 1.0, "m or rad"));
     v.number("robust_kernel_width", robust_kernel_width, Bounds::openClosed(0.0, 1000.0, "sigmas"));
@@ -65,7 +61,8 @@ struct PoseGraphSummary {
   int iterations = 0;
   double initial_cost = 0.0;  // robust cost before and after
   double final_cost = 0.0;
-  bool converged = false;
+  SolveEnd end = SolveEnd::kIterationLimit;
+  bool converged() const { return end == SolveEnd::kConverged; }
 };
 
 // The error of one edge at the given poses, with optional Jacobians (3×3
@@ -97,7 +94,6 @@ class PoseGraph {
 
  private:
   double cost(const std::vector<Pose2>& poses, double kernel_width) const;
-  PoseGraphSummary optimizeWithCeres(const PoseGraphOptions& options);  // ceres_solve.cc
 
   std::vector<Pose2> poses_;
   std::vector<PoseGraphEdge> edges_;

@@ -17,7 +17,7 @@
 // trajectory_file: the solution as one pose per scan (the scan anchors
 // placed on the solved nodes), in DIR, for evaluate_relations.
 //
-// Residuals for Ceres: r = S e with Sᵀ S = Ω (Cholesky of the information),
+// Residuals for Ceres: r = S e with Sᵀ S = Ω (from the information's eigen-decomposition),
 // e and its Jacobians from the hand-written code (edgeError,
 // relativePoseError, observationError), headings plain parameters wrapped
 // inside the error as the hand-written code does. Kernels: Ceres's
@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "ekf_slam_core/io/trajectory_file.h"
-#include "ekf_slam_core/pose_graph/ceres_costs.h"
 #include "ekf_slam_core/pose_graph/graph_io.h"
+#include "ekf_slam_core/testing/ceres_reference.h"
 
 namespace ekf_slam {
 namespace {
@@ -107,14 +107,12 @@ Outcome solvePoseGraphByHand(const PoseGraph& problem, const PoseGraphOptions& o
   best.solver = name;
   for (int run = 0; run < repeats; ++run) {
     PoseGraph graph = problem;
-    PoseGraphOptions by_hand = options;
-    by_hand.solver = "levenberg_marquardt";
     const auto start = Clock::now();
-    const PoseGraphSummary summary = graph.optimize(by_hand);
+    const PoseGraphSummary summary = graph.optimize(options);
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
-    best.termination = summary.converged ? "converged" : "iteration limit";
+    best.termination = solveEndName(summary.end);
     best.poses = graph.poses();
   }
   best.cost = poseGraphCost(problem, best.poses, options.robust_kernel_width);
@@ -151,32 +149,18 @@ Outcome solvePoseGraphWithCeres(const PoseGraph& graph, const PoseGraphOptions& 
 
 // ---- landmark graph ------------------------------------------------------
 
-// The same problem with other values (to evaluate LandmarkGraph::cost there).
-LandmarkGraph withValues(const LandmarkGraph& graph, const std::vector<Pose2>& poses,
-                         const std::vector<Vector2>& landmarks) {
-  LandmarkGraph out(graph.laserPose());
-  for (int i = 0; i < graph.poseCount(); ++i) out.addPose(poses[i], graph.isFixed(i));
-  for (const Vector2& m : landmarks) out.addLandmark(m);
-  for (const RelativePoseEdge& e : graph.relativeEdges()) out.addEdge(e);
-  for (const PosePriorEdge& e : graph.priorEdges()) out.addEdge(e);
-  for (const ObservationEdge& e : graph.observationEdges()) out.addEdge(e);
-  return out;
-}
-
 Outcome solveLandmarkGraphByHand(const LandmarkGraph& problem, const LandmarkGraphOptions& options,
                                  const std::string& name, int repeats) {
   Outcome best;
   best.solver = name;
   for (int run = 0; run < repeats; ++run) {
     LandmarkGraph graph = problem;
-    LandmarkGraphOptions by_hand = options;
-    by_hand.solver = "levenberg_marquardt";
     const auto start = Clock::now();
-    const LandmarkGraphSummary summary = graph.optimize(by_hand);
+    const LandmarkGraphSummary summary = graph.optimize(options);
     const double seconds = secondsSince(start);
     if (run == 0 || seconds < best.seconds) best.seconds = seconds;
     best.iterations = summary.iterations;
-    best.termination = summary.converged ? "converged" : "iteration limit";
+    best.termination = solveEndName(summary.end);
     best.poses = graph.poses();
     best.landmarks = graph.landmarks();
   }

@@ -494,7 +494,7 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
     if (round == 0) result.summary.initial_cost = summary.initial_cost;
     result.summary.iterations += summary.iterations;
     result.summary.final_cost = summary.final_cost;
-    result.summary.converged = summary.converged;
+    result.summary.end = summary.end;
     poses = problem->graph.poses();
     for (size_t g = 0; g < groups.size(); ++g) group_position[g] = problem->graph.landmarks()[g];
     if (round >= options.max_verification_rounds) break;

@@ -95,9 +95,6 @@ struct FullSmootherOptions {
   LandmarkGraphOptions optimizer = defaultOptimizer();
   static LandmarkGraphOptions defaultOptimizer() {
     LandmarkGraphOptions o;
-    // Ceres: on every log as accurate as the hand-written solver or more,
-    // and converged where that one stops at its cap (docs/solvers.md).
-    o.solver = "ceres";
     o.max_iterations = 100;
     o.min_relative_decrease = 1e-5;
     return o;

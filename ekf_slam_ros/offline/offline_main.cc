@@ -600,9 +600,9 @@ void reportSmoother(const Trajectories& t, std::ostream& report) {
          << "), " << smoother.observation_edges << " observation edges, "
          << smoother.constraint_edges << " loop and heading-loop edges, "
          << smoother.detached_visits << " revisits detached; " << smoother.summary.iterations
-         << " iterations (" << (smoother.summary.converged ? "converged" : "not converged")
-         << "), cost " << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost
-         << ", " << t.smoothing_seconds << " s\n"
+         << " iterations (" << solveEndName(smoother.summary.end) << "), cost "
+         << smoother.summary.initial_cost << " -> " << smoother.summary.final_cost << ", "
+         << t.smoothing_seconds << " s\n"
          << "wheel edges: " << wheelEdgesLine(smoother.wheels) << "\n";
 }
 

@@ -11,6 +11,9 @@
 #             one trajectory per solver, table.md)
 #   LOGS      logs in ../shared/datasets (NAME.orig.bag + NAME.relations)
 #   CPU       the one core every timed program is pinned to
+#   SOLVER_BIN  a Release build's devel/lib/ekf_slam with solver_comparison
+#             (make benchmark's, under ~/.cache/ekf_slam): used as it is,
+#             no workspace of its own built
 set -euo pipefail
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -22,27 +25,34 @@ cpu=${CPU:-1}
 # One thread everywhere: Ceres is told so, the BLAS under CHOLMOD too.
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 
-"$root/tools/ci/install_deps.sh"
+if [ -n "${SOLVER_BIN:-}" ]; then
+  bin=$SOLVER_BIN
+  # shellcheck disable=SC1091
+  set +u; source "$bin/../../setup.bash"; set -u
+else
+  "$root/tools/ci/install_deps.sh"
 
-mkdir -p "$ws/src" "$out"
-if [ ! -e "$ws/src/ekf_slam" ]; then ln -s "$root" "$ws/src/ekf_slam"; fi
-if [ "$(readlink -f "$ws/src/ekf_slam")" != "$(readlink -f "$root")" ]; then
-  echo "solver_comparison: $ws/src/ekf_slam links to another checkout; set SOLVER_WS" >&2
-  exit 1
+  mkdir -p "$ws/src"
+  if [ ! -e "$ws/src/ekf_slam" ]; then ln -s "$root" "$ws/src/ekf_slam"; fi
+  if [ "$(readlink -f "$ws/src/ekf_slam")" != "$(readlink -f "$root")" ]; then
+    echo "solver_comparison: $ws/src/ekf_slam links to another checkout; set SOLVER_WS" >&2
+    exit 1
+  fi
+  echo "solver_comparison: building in $ws (log: $ws/build.log)" >&2
+  (cd "$ws" && catkin_make -j1 -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release \
+    -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > "$ws/build.log" 2>&1) ||
+    { tail -n 40 "$ws/build.log"; echo "solver_comparison: build failed" >&2; exit 1; }
+  bin=$ws/devel/lib/ekf_slam
+  if [ ! -x "$bin/solver_comparison" ]; then
+    echo "solver_comparison: not built (Ceres not found by CMake?)" >&2
+    exit 1
+  fi
+  set +u
+  # shellcheck disable=SC1091
+  source "$ws/devel/setup.bash"
+  set -u
 fi
-echo "solver_comparison: building in $ws (log: $ws/build.log)" >&2
-(cd "$ws" && catkin_make -j1 -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release \
-  -DEKF_SLAM_BUILD_BENCH=ON -DCATKIN_ENABLE_TESTING=OFF > "$ws/build.log" 2>&1) ||
-  { tail -n 40 "$ws/build.log"; echo "solver_comparison: build failed" >&2; exit 1; }
-bin=$ws/devel/lib/ekf_slam
-if [ ! -x "$bin/solver_comparison" ]; then
-  echo "solver_comparison: not built (Ceres not found by CMake?)" >&2
-  exit 1
-fi
-set +u
-# shellcheck disable=SC1091
-source "$ws/devel/setup.bash"
-set -u
+mkdir -p "$out"
 
 score() {  # log trajectory -> mean translation error [m] (or "-")
   local result

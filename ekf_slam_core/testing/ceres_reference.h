@@ -1,5 +1,8 @@
-// The pose graph's and the full smoother's residuals as Ceres cost
-// functions: the errors and Jacobians are this folder's own (edgeError,
+// Ceres as the reference the hand-written Levenberg–Marquardt is checked
+// against (the gtests of pose_graph/, tools/dev/solver_comparison.sh); the
+// pipeline does not use it. The pose graph's and the full smoother's
+// residuals as Ceres cost functions: the errors and Jacobians are
+// pose_graph/'s own (edgeError,
 // relativePoseError, observationError), whitened by S with Sᵀ S = Ω, so
 // that Ceres's ½ Σ ρ(‖S e‖²) is half the hand-written cost Σ ρ(eᵀ Ω e)
 // term for term (Ceres's CauchyLoss(c) and HuberLoss(c) are the ρ of
@@ -132,7 +135,7 @@ struct Kernels {
   ceres::HuberLoss huber;
 };
 
-// The problems, built once for the pipeline (ceres_solve.cc) and the solver
+// The problems, built once for the reference solves below and the solver
 // comparison alike. Each unknown is an array (pose: x, y, θ; landmark: x, y)
 // the caller fills with the start and reads back; loss functions come from
 // `kernels` (the problem must not own them: DO_NOT_TAKE_OWNERSHIP).
@@ -145,4 +148,17 @@ void addLandmarkGraph(const LandmarkGraph& graph, Kernels* kernels,
                       std::vector<std::array<double, 2>>* landmarks, ceres::Problem* problem);
 
 }  // namespace ceres_costs
+
+// Ceres's Levenberg–Marquardt (sparse Cholesky of the normal equations, one
+// thread, the same first damping) from the graph's current values, until a
+// step lowers the cost by less than `function_tolerance` of it. Returns the
+// solved graph; its summary's costs are the hand-written Σ ρ(eᵀ Ω e).
+PoseGraph solveWithCeres(const PoseGraph& graph, const PoseGraphOptions& options,
+                         double function_tolerance, PoseGraphSummary* summary = nullptr);
+LandmarkGraph solveWithCeres(const LandmarkGraph& graph, const LandmarkGraphOptions& options,
+                             LandmarkGraphSummary* summary = nullptr);
+// The same problem with other values.
+LandmarkGraph withValues(const LandmarkGraph& graph, const std::vector<Pose2>& poses,
+                         const std::vector<Vector2>& landmarks);
+
 }  // namespace ekf_slam
