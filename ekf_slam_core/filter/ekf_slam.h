@@ -4,22 +4,18 @@
 // their normal form, or line directions θ alone (the thesis's θ-only lines,
 // §4.3.3, whose offset comes from endpoint point landmarks).
 //
-// State layout (use the helpers, never bare indices):
-//   x = [x_r (kPoseDim = 3: x, y, θ) | landmark 0 | landmark 1 | …]
-//   each landmark landmarkDim(kind) long, from landmarkIndex(slot) on.
-// Landmarks keep a stable id; their slot and index change when others are
-// removed.
+// The state is a value (FilterState, filter_state.h: the mean, the
+// covariance, the landmarks' bookkeeping, and its layout). This class runs
+// the filter on it: prediction, point updates and augmentation, updates
+// from outside models (updateGeneric). Line landmarks
+// (line_landmark_update.h) and the map's upkeep (map_maintenance.h) are
+// units of their own acting on the same state; the members below that
+// name them hand over to those units.
 //
 // Cost per operation with n = state size and k matched observations:
 //   predict O(n) (only the robot rows/columns change), augment O(n),
 //   update O(n²k) through a symmetric rank-2k downdate of P (no Joseph
 //   product, no n×n×n multiply; P stays symmetric by construction).
-// The stored P is current in its lower triangle; of the upper one only the
-// pose rows and each landmark's 2 × 2 block are kept, O(n) after a downdate
-// (mirroring the whole triangle would cost about as much as the downdate).
-// An update or merge first fills the landmark columns it reads from the
-// lower triangle; covariance() returns a full symmetric copy.
-//
 // Every operation validates its input. On any status other than kOk the
 // state is unchanged, so a caller can count, log and carry on.
 #pragma once
@@ -33,6 +29,7 @@
 #include <utility>
 #include <vector>
 
+#include "ekf_slam_core/filter/filter_state.h"
 #include "ekf_slam_core/filter/filter_status.h"
 #include "ekf_slam_core/models/line_observation_model.h"
 #include "ekf_slam_core/models/odometry_motion_model.h"
@@ -89,14 +86,6 @@ struct LineObservation {
   Matrix2 covariance = Matrix2::Identity();  // of (p m, θ rad): m², m·rad, rad²
 };
 
-enum class LandmarkKind {
-  kPoint,      // (x, y)
-  kLine,       // (p, θ): x cos θ + y sin θ = p in the map frame, p >= 0
-  kLineAngle,  // θ alone: the direction of a line's normal in the map frame
-};
-constexpr int landmarkDim(LandmarkKind kind) { return kind == LandmarkKind::kLineAngle ? 1 : 2; }
-const char* toString(LandmarkKind kind);
-
 // A line observation matched to a line landmark. For a θ-only landmark
 // the offset comes from up to two point landmarks on the line (its
 // endpoints, thesis eqs. 4.35, 4.38): with none only θ is measured.
@@ -104,19 +93,6 @@ struct LineMatch {
   int observation = -1;            // index into the line observation vector
   int landmark_id = -1;            // a kLine or kLineAngle landmark
   int endpoint_ids[2] = {-1, -1};  // kLineAngle: point landmarks on the line (-1: none)
-};
-
-struct LandmarkInfo {
-  int id = -1;
-  LandmarkKind kind = LandmarkKind::kPoint;
-  int index = 0;            // of its first component in the state (changes when others go)
-  int observations = 0;     // the creating observation plus every accepted match
-  long created_step = 0;    // filter step at augmentation
-  long last_seen_step = 0;  // filter step of the last match
-  // When created, for first-estimates Jacobians: a point's position, a
-  // line's (p, θ) (kept in the state's coordinates when p changes sign),
-  // a direction's (0, θ_f).
-  Vector2 first_estimate = Vector2::Zero();
 };
 
 struct PointMatch {
@@ -138,16 +114,13 @@ struct GenericObservation {
 
 class EkfSlam {
  public:
-  static constexpr int kPoseDim = 3;
+  static constexpr int kPoseDim = FilterState::kPoseDim;
   static constexpr int kPointDim = 2;
   // A slot must name a landmark in the state (slotOf() >= 0).
-  int landmarkIndex(int slot) const {
-    assert(slot >= 0 && slot < landmarkCount());
-    return landmarks_[slot].index;
-  }
+  int landmarkIndex(int slot) const { return state_.landmarkIndex(slot); }
   LandmarkKind landmarkKind(int slot) const {
     assert(slot >= 0 && slot < landmarkCount());
-    return landmarks_[slot].kind;
+    return state_.landmarks[slot].kind;
   }
 
   // Options must be valid (check options.validate() first); the initial
@@ -215,7 +188,7 @@ class EkfSlam {
   FilterStatus updateGeneric(const GenericObservation& observation, double* nis = nullptr);
   // The line landmark in `slot` (kLine) or its direction (kLineAngle).
   PolarLine lineLandmark(int slot) const;
-  double lineAngle(int slot) const { return x_(landmarkIndex(slot)); }
+  double lineAngle(int slot) const { return state_.x(landmarkIndex(slot)); }
 
   // Removes landmarks seen only once whose age exceeds
   // options().tentative_max_age steps. Returns how many were removed.
@@ -270,36 +243,45 @@ class EkfSlam {
 
   // Localisation only when false: augment() refuses (kMappingDisabled), so
   // the map keeps its landmarks and gains none. On by default.
-  void setMappingEnabled(bool enabled) { mapping_enabled_ = enabled; }
-  bool mappingEnabled() const { return mapping_enabled_; }
+  void setMappingEnabled(bool enabled) { state_.mapping_enabled = enabled; }
+  bool mappingEnabled() const { return state_.mapping_enabled; }
 
-  Pose2 pose() const { return Pose2(x_(0), x_(1), x_(2)); }
-  Matrix3 poseCovariance() const { return P_.topLeftCorner<3, 3>(); }
-  int landmarkCount() const { return static_cast<int>(landmarks_.size()); }
-  int stateDim() const { return dim_; }
-  int slotOf(int id) const;  // -1 when no landmark has this id
+  Pose2 pose() const { return state_.pose(); }
+  Matrix3 poseCovariance() const { return state_.poseCovariance(); }
+  int landmarkCount() const { return state_.landmarkCount(); }
+  int stateDim() const { return state_.dim; }
+  int slotOf(int id) const { return state_.slotOf(id); }  // -1 when no landmark has this id
   // Of a point landmark, or a (p, θ) line's (p, θ) and its 2 × 2 block.
-  Vector2 landmarkPosition(int slot) const { return x_.segment<2>(landmarkIndex(slot)); }
+  Vector2 landmarkPosition(int slot) const { return state_.landmarkPosition(slot); }
   Matrix2 landmarkCovariance(int slot) const {
-    return P_.block<2, 2>(landmarkIndex(slot), landmarkIndex(slot));
+    return state_.P.block<2, 2>(landmarkIndex(slot), landmarkIndex(slot));
   }
   // Of a θ-only line landmark's direction (rad²).
-  double lineAngleVariance(int slot) const { return P_(landmarkIndex(slot), landmarkIndex(slot)); }
-  const std::vector<LandmarkInfo>& landmarks() const { return landmarks_; }
+  double lineAngleVariance(int slot) const {
+    return state_.P(landmarkIndex(slot), landmarkIndex(slot));
+  }
+  const std::vector<LandmarkInfo>& landmarks() const { return state_.landmarks; }
   // Cross-covariance of two landmarks' positions (P_ab, 2 × 2).
-  Matrix2 landmarkCrossCovariance(int slot_a, int slot_b) const;
+  Matrix2 landmarkCrossCovariance(int slot_a, int slot_b) const {
+    return state_.landmarkCrossCovariance(slot_a, slot_b);
+  }
   // Of the pose and a landmark's position (P_rm, 3 × 2).
   Eigen::Matrix<double, 3, 2> poseLandmarkCovariance(int slot) const {
-    return P_.block<3, 2>(0, landmarkIndex(slot));
+    return state_.P.block<3, 2>(0, landmarkIndex(slot));
   }
-  Eigen::Ref<const Eigen::VectorXd> state() const { return x_.head(dim_); }
+  Eigen::Ref<const Eigen::VectorXd> state() const { return state_.x.head(state_.dim); }
   // The whole n × n covariance, a copy (O(n²)): for tests and tools; the
   // accessors above read single blocks.
-  Eigen::MatrixXd covariance() const;
-  long step() const { return step_; }
+  Eigen::MatrixXd covariance() const { return state_.covariance(); }
+  long step() const { return state_.step; }
   // F of the last accepted prediction (for the smoother's record).
-  const Matrix3& lastMotionJacobian() const { return last_F_; }
+  const Matrix3& lastMotionJacobian() const { return state_.last_F; }
   const FilterOptions& options() const { return options_; }
+
+  // Everything the filter knows, as a value (a snapshot), and back: a
+  // restored state continues exactly where the snapshot was taken.
+  const FilterState& filterState() const { return state_; }
+  void restore(const FilterState& state) { state_ = state; }
 
   // Normalised estimation error squared of the pose against ground truth.
   double poseNees(const Pose2& truth) const;
@@ -318,35 +300,8 @@ class EkfSlam {
                 const std::vector<std::pair<int, Pose2>>& landmark_corrections);
 
  private:
-  void reserve(int dim);
-  struct LinearisedLine;
-  FilterStatus linearizeLineMatch(const LineObservation& observation, const LineMatch& match,
-                                  LinearisedLine* out) const;
-  // The update's last step, shared by points and lines: x += W L⁻¹ ν and
-  // the downdate P −= W Wᵀ of the lower triangle, W = P Hᵀ L⁻ᵀ.
-  void applyGain(const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
-                 const Eigen::VectorXd& innovation);
-  void mirrorPoseRowsAndLandmarkBlocks();
-  void fillLandmarkColumns(const std::vector<int>& slots);
-  void removeSlots(const std::vector<int>& slots);
-  // Appends a landmark of `kind` at the end of the state (its mean and the
-  // rows already written by the caller) and returns its id.
-  int appendLandmark(LandmarkKind kind, int id, int observations, const Vector2& first_estimate);
-
   FilterOptions options_;
-  // Storage with spare capacity so that augmentation does not reallocate the
-  // n×n matrix every time; only the leading dim_ rows/columns are live.
-  Eigen::VectorXd x_;
-  Eigen::MatrixXd P_;
-  int dim_ = kPoseDim;
-  std::vector<LandmarkInfo> landmarks_;  // by slot
-  std::unordered_map<int, int> slot_of_id_;
-  int next_id_ = 0;
-  long step_ = 0;
-  Matrix3 last_F_ = Matrix3::Identity();
-  bool have_prior_position_ = false;  // first-estimates Jacobians: the last predicted position
-  Vector2 prior_position_ = Vector2::Zero();
-  bool mapping_enabled_ = true;
+  FilterState state_;
 };
 
 }  // namespace ekf_slam

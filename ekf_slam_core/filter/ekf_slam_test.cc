@@ -554,6 +554,43 @@ TEST(EkfSlam, FirstEstimatesJacobiansUseThePriorPositionsAndFirstLandmarkEstimat
   EXPECT_TRUE(p.H_landmark.isApprox(Hm, 1e-14));
 }
 
+// The filter's state is a value: a snapshot restored into another filter
+// (with line landmarks, after removals, so that the storage has spare
+// capacity and moved entries) continues bit for bit as the original does.
+TEST(EkfSlam, ARestoredSnapshotContinuesExactly) {
+  EkfSlam original = builtFilter();
+  LineObservation wall;
+  wall.z = PolarLine{2.0, 0.3};
+  wall.covariance << 1e-4, 0.0, 0.0, 1e-4;
+  int line_id = -1;
+  ASSERT_EQ(original.augmentLine(wall, LandmarkKind::kLine, &line_id), FilterStatus::kOk);
+  ASSERT_EQ(original.augment(observation(2.5, -0.2)), FilterStatus::kOk);
+  ASSERT_TRUE(original.removeLandmark(1));
+  const FilterState snapshot = original.filterState();
+
+  auto continueFrom = [&](EkfSlam* filter) {
+    ASSERT_EQ(filter->predict(Pose2(), Pose2(0.2, -0.03, 0.05), 0.2), FilterStatus::kOk);
+    ASSERT_EQ(filter->update({observation(1.7, 0.3)}, {{0, 0}}), FilterStatus::kOk);
+    LineObservation seen = wall;
+    seen.z = PolarLine{1.85, 0.26};
+    ASSERT_EQ(filter->updateLines({seen}, {{0, line_id}}), FilterStatus::kOk);
+    ASSERT_EQ(filter->augment(observation(2.2, 0.9)), FilterStatus::kOk);
+  };
+  continueFrom(&original);
+  EkfSlam restored(testOptions());
+  restored.restore(snapshot);
+  continueFrom(&restored);
+  ASSERT_EQ(restored.stateDim(), original.stateDim());
+  EXPECT_EQ(restored.state(), original.state());
+  EXPECT_EQ(restored.covariance(), original.covariance());
+  ASSERT_EQ(restored.landmarkCount(), original.landmarkCount());
+  for (int slot = 0; slot < original.landmarkCount(); ++slot) {
+    EXPECT_EQ(restored.landmarks()[slot].id, original.landmarks()[slot].id);
+    EXPECT_EQ(restored.landmarks()[slot].observations, original.landmarks()[slot].observations);
+  }
+  EXPECT_EQ(restored.step(), original.step());
+}
+
 TEST(EkfSlam, OptionsValidationNamesTheField) {
   FilterOptions options;
   EXPECT_EQ(options.validate(), "");

@@ -1,6 +1,6 @@
 // EkfSlam::updateGeneric: the EKF update for an observation whose model
 // lives outside the filter (the MECP centre of mecp/mecp_update.h). Kept in
-// its own file: the filter's own observation kinds stay in ekf_slam.cc.
+// its own file: the filter's own point observations stay in ekf_slam.cc.
 #include <Eigen/Cholesky>
 
 #include "ekf_slam_core/filter/ekf_slam.h"
@@ -29,15 +29,15 @@ FilterStatus EkfSlam::updateGeneric(const GenericObservation& observation, doubl
       if (slots[k] == slots[i]) return FilterStatus::kBadObservation;
     }
     const Eigen::MatrixXd& J = observation.J_z_landmarks[i];
-    if (J.rows() != d || J.cols() != landmarkDim(landmarks_[slots[i]].kind)) {
+    if (J.rows() != d || J.cols() != landmarkDim(state_.landmarks[slots[i]].kind)) {
       return FilterStatus::kBadObservation;
     }
     if (!J.allFinite()) return FilterStatus::kNonFiniteInput;
   }
 
-  const int n = dim_;
-  fillLandmarkColumns(slots);
-  auto P = P_.topLeftCorner(n, n);
+  const int n = state_.dim;
+  state_.fillLandmarkColumns(slots);
+  auto P = state_.P.topLeftCorner(n, n);
   // P Hᵀ (n × d) from the sparse H: the pose's and the listed landmarks'
   // column blocks only.
   Eigen::MatrixXd PHt = P.leftCols<kPoseDim>() * observation.J_z_pose.transpose();
@@ -56,8 +56,8 @@ FilterStatus EkfSlam::updateGeneric(const GenericObservation& observation, doubl
     return FilterStatus::kSingularInnovation;
   }
   if (nis) *nis = innovation.dot(llt.solve(innovation));
-  applyGain(PHt, llt, innovation);
-  mirrorPoseRowsAndLandmarkBlocks();
+  state_.applyGain(PHt, llt, innovation);
+  state_.mirrorPoseRowsAndLandmarkBlocks();
   return FilterStatus::kOk;
 }
 
