@@ -37,6 +37,19 @@ LoopClosureBackEnd::LoopClosureBackEnd(const LoopClosureOptions& options,
   if (own_thread_) worker_ = std::thread([this] { run(); });
 }
 
+LoopClosureBackEnd::LoopClosureBackEnd(const LoopClosureBackEnd& other)
+    : delay_(other.delay_), own_thread_(other.own_thread_), closer_(other.drained()) {
+  {
+    std::lock_guard<std::mutex> lock(other.mutex_);
+    handed_ = other.handed_;
+    processed_ = other.processed_;
+    key_count_ = other.key_count_;
+    optimisations_ = other.optimisations_;
+    views_ = other.views_;  // immutable, shared
+  }
+  if (own_thread_) worker_ = std::thread([this] { run(); });
+}
+
 LoopClosureBackEnd::~LoopClosureBackEnd() {
   if (!own_thread_) return;
   {

@@ -54,7 +54,11 @@ class LoopClosureBackEnd {
   LoopClosureBackEnd(const LoopClosureOptions& options, const ScanMatcherOptions& matcher,
                      bool own_thread, long scan_history = 0);
   ~LoopClosureBackEnd();
-  LoopClosureBackEnd(const LoopClosureBackEnd&) = delete;
+  // A snapshot: waits until `other` has processed every scan handed over,
+  // then copies its LoopCloser and views; the copy runs a thread of its own
+  // when `other` does, and continues as `other` would. Not while another
+  // thread hands `other` scans.
+  LoopClosureBackEnd(const LoopClosureBackEnd& other);
   LoopClosureBackEnd& operator=(const LoopClosureBackEnd&) = delete;
 
   // Every scan, in order (see LoopCloser::addScan). Returns the view this

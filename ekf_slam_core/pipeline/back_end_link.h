@@ -78,9 +78,21 @@ class BackEndLink {
   void trackKeyScans();
 
   Pose2 laser_pose_;
-  std::unique_ptr<LoopClosureBackEnd> back_end_;  // null when loop closure is off
-  std::shared_ptr<const BackEndView> view_;       // the back end as the last scan saw it
-  long loops_seen_ = 0;                           // accepted loops in that view
+  // The back end by pointer (it may run a thread of its own); a copy of the
+  // link copies it (LoopClosureBackEnd's copy: its state, a thread of its
+  // own), so that the link is a value too.
+  struct CopiedBackEnd : std::unique_ptr<LoopClosureBackEnd> {
+    CopiedBackEnd(std::unique_ptr<LoopClosureBackEnd> back_end)  // NOLINT: implicit on purpose
+        : std::unique_ptr<LoopClosureBackEnd>(std::move(back_end)) {}
+    CopiedBackEnd(const CopiedBackEnd& other)
+        : std::unique_ptr<LoopClosureBackEnd>(other ? std::make_unique<LoopClosureBackEnd>(*other)
+                                                    : nullptr) {}
+    CopiedBackEnd(CopiedBackEnd&&) = default;
+    CopiedBackEnd& operator=(CopiedBackEnd&&) = default;
+  };
+  CopiedBackEnd back_end_;                   // null when loop closure is off
+  std::shared_ptr<const BackEndView> view_;  // the back end as the last scan saw it
+  long loops_seen_ = 0;                      // accepted loops in that view
   // History record of each scan given to the back end (from loop scan
   // first_loop_scan_ on; both count from the run's first).
   std::vector<long> record_of_loop_scan_;

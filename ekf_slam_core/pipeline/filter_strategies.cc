@@ -54,7 +54,7 @@ void RoomGatingStrategy::rebuild(const EkfSlam& filter, const LineLandmarks& lin
   }
   counters_.rooms = rooms.roomCount();
   counters_.doorways = static_cast<int>(doorways.size());
-  gate_ = std::make_unique<RoomGate>(std::move(rooms), doorways, options_.gate);
+  gate_.emplace(std::move(rooms), doorways, options_.gate);
   for (const auto& [id, seen_from] : seen_from_) {
     gate_->labelLandmark(id, filter.landmarkPosition(filter.slotOf(id)), seen_from);
   }

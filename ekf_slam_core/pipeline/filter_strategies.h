@@ -5,7 +5,7 @@
 // The third, wall lines as landmarks, is LineLandmarks (line_landmarks.h).
 #pragma once
 
-#include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -42,14 +42,14 @@ class RoomGatingStrategy {
   // rebuild_interval iterations.
   void afterIteration(const EkfSlam& filter, const LineLandmarks& lines);
 
-  const RoomGate* gate() const { return gate_.get(); }
+  const RoomGate* gate() const { return gate_ ? &*gate_ : nullptr; }
   const RoomCounters& counters() const { return counters_; }
 
  private:
   void rebuild(const EkfSlam& filter, const LineLandmarks& lines);
 
   RoomGatingOptions options_;
-  std::unique_ptr<RoomGate> gate_;  // once a rebuild found rooms
+  std::optional<RoomGate> gate_;  // once a rebuild found rooms
   long iterations_since_rebuild_ = 0;
   std::unordered_map<int, Vector2> seen_from_;  // per point landmark id, where the laser was
   RoomCounters counters_;

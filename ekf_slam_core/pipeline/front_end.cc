@@ -4,15 +4,15 @@ namespace ekf_slam {
 
 namespace {
 // The full smoother's local matcher, when its motion edges need one.
-std::unique_ptr<ScanMatchingOdometry> localMatcherFor(const PipelineOptions& options) {
+std::optional<ScanMatchingOdometry> localMatcherFor(const PipelineOptions& options) {
   if (!options.scan_matching.enabled || options.scan_matching.map_mode != "global" ||
       options.smoother.motion_edges != SmootherMotion::kLocalMatch) {
-    return nullptr;
+    return std::nullopt;
   }
   ScanMatcherOptions local = options.scan_matching;
   local.map_mode = "local";
   local.local_map_scans = options.smoother.local_match_key_scans;
-  return std::make_unique<ScanMatchingOdometry>(local, options.filter.motion_noise);
+  return ScanMatchingOdometry(local, options.filter.motion_noise);
 }
 }  // namespace
 
@@ -21,12 +21,11 @@ FrontEnd::FrontEnd(const PipelineOptions& options)
       matching_(options.scan_matching),
       max_step_translation_(options.filter.max_step_translation),
       max_step_rotation_(options.filter.max_step_rotation),
-      scan_matcher_(options.scan_matching.enabled
-                        ? std::make_unique<ScanMatchingOdometry>(options.scan_matching,
-                                                                 options.filter.motion_noise)
-                        : nullptr),
       local_matcher_(localMatcherFor(options)) {
-  counters_.local_matcher_runs = local_matcher_ != nullptr;
+  if (options.scan_matching.enabled) {
+    scan_matcher_.emplace(options.scan_matching, options.filter.motion_noise);
+  }
+  counters_.local_matcher_runs = local_matcher_.has_value();
 }
 
 Pose2 FrontEnd::track(const Scan* scan, const Pose2& raw_odometry, bool usable, bool check_jump,

@@ -4,10 +4,10 @@
 // (ScanMatchingOdometry) and the scan-matched pose takes the place of the
 // raw odometry everywhere after this stage. A second, local matcher runs
 // beside a global front end when the full smoother's motion edges are
-// measured by it (smoother.motion_edges: local_match).
+// measured by it (smoother.motion_edges: local_match). A value: a copy is
+// a snapshot of the matchers' maps and poses, and continues as the original.
 #pragma once
 
-#include <memory>
 #include <optional>
 
 #include "ekf_slam_core/pipeline/pipeline_options.h"
@@ -51,7 +51,7 @@ class FrontEnd {
 
   // True when the control is scan-matched (the wheels are then a separate
   // measurement for the full smoother).
-  bool matchesScans() const { return scan_matcher_ != nullptr; }
+  bool matchesScans() const { return scan_matcher_.has_value(); }
   const FrontEndCounters& counters() const { return counters_; }
 
  private:
@@ -59,10 +59,10 @@ class FrontEnd {
   ScanMatcherOptions matching_;
   double max_step_translation_ = 0.0;  // the filter's jump bounds
   double max_step_rotation_ = 0.0;
-  std::unique_ptr<ScanMatchingOdometry> scan_matcher_;  // null when disabled
+  std::optional<ScanMatchingOdometry> scan_matcher_;  // none when disabled
   // The full smoother's motion edges (FullSmootherOptions::motion_edges):
-  // null unless they come from a local matcher beside a global front end.
-  std::unique_ptr<ScanMatchingOdometry> local_matcher_;
+  // none unless they come from a local matcher beside a global front end.
+  std::optional<ScanMatchingOdometry> local_matcher_;
   Pose2 local_pose_;       // the local matcher's pose at the scan tracked last
   Pose2 last_local_pose_;  // … and at the last iteration (or re-anchor)
   FrontEndCounters counters_;

@@ -5,19 +5,17 @@
 namespace ekf_slam {
 
 namespace {
-std::unique_ptr<LineLandmarks> lineLandmarksFor(const PipelineOptions& options) {
+std::optional<LineLandmarks> lineLandmarksFor(const PipelineOptions& options) {
   switch (options.landmarks) {
     case LandmarkSet::kPoints:
     case LandmarkSet::kPointsAndMecp:
-      return nullptr;
+      return std::nullopt;
     case LandmarkSet::kPointsAndLines:
-      return std::make_unique<LineLandmarks>(LandmarkKind::kLine, options.lines,
-                                             options.association);
+      return LineLandmarks(LandmarkKind::kLine, options.lines, options.association);
     case LandmarkSet::kPointsAndLineAngles:
-      return std::make_unique<LineLandmarks>(LandmarkKind::kLineAngle, options.lines,
-                                             options.association);
+      return LineLandmarks(LandmarkKind::kLineAngle, options.lines, options.association);
   }
-  return nullptr;
+  return std::nullopt;
 }
 
 // With scan matching the control is the scan-matched increment, with its
@@ -32,11 +30,10 @@ FilterOptions filterOptionsFor(const PipelineOptions& options) {
 LocalFilter::LocalFilter(const PipelineOptions& options)
     : options_(options),
       filter_(filterOptionsFor(options), options.initial_pose, options.initial_pose_covariance),
-      lines_(lineLandmarksFor(options)),
-      mecp_(options.landmarks == LandmarkSet::kPointsAndMecp ? std::make_unique<MecpStrategy>()
-                                                             : nullptr),
-      rooms_(options.rooms.enabled ? std::make_unique<RoomGatingStrategy>(options.rooms)
-                                   : nullptr) {}
+      lines_(lineLandmarksFor(options)) {
+  if (options.landmarks == LandmarkSet::kPointsAndMecp) mecp_.emplace();
+  if (options.rooms.enabled) rooms_.emplace(options.rooms);
+}
 
 Pose2 LocalFilter::deadReckoned(const Pose2& anchor, const Pose2& odometry) const {
   return compose(filter_.pose(), between(anchor, odometry));

@@ -7,7 +7,7 @@
 // once the history has recorded the iteration, to maintain().
 #pragma once
 
-#include <memory>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -89,9 +89,9 @@ class LocalFilter {
 
   PipelineOptions options_;
   EkfSlam filter_;
-  std::unique_ptr<LineLandmarks> lines_;       // null with points only
-  std::unique_ptr<MecpStrategy> mecp_;         // landmarks: points+mecp
-  std::unique_ptr<RoomGatingStrategy> rooms_;  // rooms.enabled
+  std::optional<LineLandmarks> lines_;       // none with points only
+  std::optional<MecpStrategy> mecp_;         // landmarks: points+mecp
+  std::optional<RoomGatingStrategy> rooms_;  // rooms.enabled
   PointCounters points_;
   LineCounters lines_counted_;
 };

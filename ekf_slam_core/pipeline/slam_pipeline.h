@@ -60,6 +60,11 @@ struct ScanCounters {
 // Every stage's counts, for reports and diagnostics.
 struct PipelineCounters : ScanCounters, FrontEndCounters, FilterCounters {};
 
+// A value: every stage is one (the front end's matchers, the filter's state
+// with its strategies, the back end's graph and views, the history), so a
+// copy is a snapshot of everything the pipeline knows and continues exactly
+// as the original would. Copying waits for a back end on its own thread to
+// process the scans handed to it; it must not race processScan.
 class SlamPipeline {
  public:
   // Options must be valid (check validate()).

@@ -521,6 +521,50 @@ TEST(SlamPipeline, BackEndThreadGivesTheInlineAnswerInTheDeterministicMode) {
   }
 }
 
+// The pipeline is a value: a copy taken half-way round the island (the
+// matchers' maps, the filter's state, the back end's graph and key scans,
+// the history) continues bit for bit as the original does through the
+// loops that close afterwards, inline and with the back end on its thread;
+// and the original is untouched by the copy's scans.
+TEST(SlamPipeline, ACopyContinuesExactlyAsTheOriginal) {
+  const sim::PolygonWorld world = cartonRoom();
+  const Pose2 laser(0.1, 0.0, 0.0);
+  for (const bool thread : {false, true}) {
+    PipelineOptions options = cartonLoopOptions(laser, /*loop_closure=*/true, 0);
+    options.back_end_thread = thread;
+    options.landmarks = LandmarkSet::kPointsAndLines;
+    SlamPipeline original(options);
+    std::mt19937 rng(5);
+    const double radius = 2.3, step = 0.08;
+    const int scans = static_cast<int>(1.5 * 2.0 * kPi * radius / step);
+    std::vector<Scan> drive;
+    std::vector<Pose2> odometry_of;
+    Pose2 odometry, previous;
+    for (int i = 0; i <= scans; ++i) {
+      const double a = step * i / radius;
+      const Pose2 truth(3.0 + radius * std::sin(a), 1.5 - radius * std::cos(a), a);
+      if (i > 0)
+        odometry = compose(odometry, compose(between(previous, truth), Pose2(0, 0, 0.002)));
+      previous = truth;
+      drive.push_back(scanAt(world, compose(truth, laser), 0.1 * i, &rng));
+      odometry_of.push_back(odometry);
+    }
+    const int half = scans / 2;
+    for (int i = 0; i < half; ++i) original.processScan(drive[i], odometry_of[i]);
+    ASSERT_EQ(original.backEndCounters().accepted, 0) << "the copy is taken before the loops";
+    SlamPipeline copy = original;
+    const std::vector<StampedPose> causal_at_copy = original.causalScanPoses();
+    for (int i = half; i <= scans; ++i) copy.processScan(drive[i], odometry_of[i]);
+    expectSamePoses(original.causalScanPoses(), causal_at_copy, "original after the copy ran");
+    for (int i = half; i <= scans; ++i) original.processScan(drive[i], odometry_of[i]);
+    EXPECT_GT(original.backEndCounters().accepted, 0) << "thread " << thread;
+    EXPECT_EQ(copy.backEndCounters().accepted, original.backEndCounters().accepted);
+    expectSamePoses(copy.causalScanPoses(), original.causalScanPoses(), "causal");
+    expectSamePoses(copy.filteredScanPoses(), original.filteredScanPoses(), "filtered");
+    EXPECT_EQ(copy.localFilter().filter().state(), original.localFilter().filter().state());
+  }
+}
+
 // Features from outside can be corrupt; the filter would invert a bad
 // covariance. They are refused, named, and the map is not touched.
 TEST(SlamPipeline, CorruptFeaturesAreRefusedAndNamed) {

@@ -518,8 +518,8 @@ void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const 
     const PointCloudReference scan(placed, options_.normal_radius,
                                    options_.initial_correspondence_distance);
     if (!reference_) {
-      reference_ = std::make_unique<PointCloudReference>(
-          std::vector<Vector2>(), options_.normal_radius, options_.initial_correspondence_distance);
+      reference_.emplace(std::vector<Vector2>(), options_.normal_radius,
+                         options_.initial_correspondence_distance);
     }
     reference_->insert(scan.points(), scan.normals(), options_.map_point_spacing);
     return;
@@ -534,8 +534,7 @@ void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const 
   local_map_.fitted(&points_with_normals, &normals);
   // Several key scans lie over one another: cells of the normal radius
   // hold fewer points to compare than the global map's.
-  reference_ = std::make_unique<PointCloudReference>(std::vector<Vector2>(), options_.normal_radius,
-                                                     options_.normal_radius);
+  reference_.emplace(std::vector<Vector2>(), options_.normal_radius, options_.normal_radius);
   reference_->insert(points_with_normals, normals, options_.map_point_spacing);
 }
 

@@ -26,6 +26,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -324,7 +325,7 @@ class ScanMatchingOdometry {
   Pose2 last_corrected_;
   Pose2 last_key_pose_;
   SlidingNormals local_map_;  // local mode: the last key scans, in the corrected frame
-  std::unique_ptr<PointCloudReference> reference_;
+  std::optional<PointCloudReference> reference_;  // the map matched against
 };
 
 }  // namespace ekf_slam
