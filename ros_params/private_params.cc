@@ -25,8 +25,17 @@ void PrivateParams::number(const std::string& key, double* value, double low, do
 void PrivateParams::integer(const std::string& key, int* value, int low, int high) {
   known_.insert(key);
   if (!node_.hasParam(key)) return;
-  int read = 0;
-  if (!node_.getParam(key, read)) return fail(key, "must be an integer");
+  // Read as XmlRpc to see the type: getParam(key, int&) rounds a double
+  // (2.5 would silently become 2).
+  XmlRpc::XmlRpcValue raw;
+  if (!node_.getParam(key, raw)) return fail(key, "must be an integer");
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+    std::ostringstream text;
+    text << "must be an integer, got " << static_cast<double>(raw);
+    return fail(key, text.str());
+  }
+  if (raw.getType() != XmlRpc::XmlRpcValue::TypeInt) return fail(key, "must be an integer");
+  const int read = static_cast<int>(raw);
   if (read < low || read > high) {
     return fail(key, "must be in [" + std::to_string(low) + ", " + std::to_string(high) +
                          "], got " + std::to_string(read));

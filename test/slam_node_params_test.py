@@ -54,6 +54,13 @@ class BadParameters(unittest.TestCase):
     def test_wrong_type_names_the_key(self):
         self.check("ekf_slam_node", "scan_queue_size", "_scan_queue_size:=many")
 
+    def test_a_fraction_where_an_integer_is_declared_is_refused(self):
+        # Not rounded to 2 or 3: the value is refused, naming the key.
+        self.check("ekf_slam_node", "scan_queue_size: must be an integer, got 2.5",
+                   "_scan_queue_size:=2.5")
+        self.check("lms200_node", "angle: must be an integer, got 180.5", "_angle:=180.5",
+                   "_port:=/dev/null")
+
     def test_same_frames_are_refused(self):
         self.check("ekf_slam_node", "map_frame", "_map_frame:=odom")
 
