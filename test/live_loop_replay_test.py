@@ -76,6 +76,7 @@ class LiveLoopReplay(unittest.TestCase):
         self.loops_accepted = 0
         self.drops = {}  # the node's "dropped: <reason>" counters
         self.received = 0  # scans the node received
+        self.diagnostics_wall = []  # wall time of each /diagnostics message
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("map", OccupancyGrid, self.on_map, queue_size=5)
         rospy.Subscriber("loop_closed_path", Path, self.on_loop_path, queue_size=100)
@@ -104,6 +105,7 @@ class LiveLoopReplay(unittest.TestCase):
                                           r.translation.y, yaw_of(r.rotation)))
 
     def on_diagnostics(self, msg):
+        self.diagnostics_wall.append(time.time())
         for status in msg.status:
             for kv in status.values:
                 if kv.key == "loops accepted":
@@ -230,6 +232,15 @@ class LiveLoopReplay(unittest.TestCase):
     def test_live_map_loops_and_causal_poses(self):
         self.play()
         self.assertGreater(len(self.poses), 1000, "the node published too few poses")
+
+        # /diagnostics runs on wall time: it keeps coming (every
+        # ~diagnostic_period, 1 s) after the log, and with it the simulated
+        # clock, has stopped and the node has caught up.
+        settled = time.time()
+        time.sleep(3.5)
+        late = [t for t in self.diagnostics_wall if t > settled]
+        self.assertGreaterEqual(len(late), 2, "%d /diagnostics in the 3.5 s after the clock "
+                                "stopped (%d before)" % (len(late), len(self.diagnostics_wall)))
 
         # The map, while the log played: trinary values, walls and free space.
         self.assertGreater(len(self.maps), 2, "no map published while the log played")

@@ -27,9 +27,17 @@ SlamDiagnostics::SlamDiagnostics(ros::NodeHandle node, ros::NodeHandle private_n
       updater_(node, private_node) {
   updater_.setHardwareID("ekf_slam");
   updater_.add("EKF-SLAM", this, &SlamDiagnostics::diagnose);
-  last_time_ = ros::WallTime::now();
-  timer_ =
-      node.createTimer(ros::Duration(0.1), [this](const ros::TimerEvent&) { updater_.update(); });
+  last_time_ = last_published_ = ros::WallTime::now();
+  // On wall time, every ~diagnostic_period (the updater's): /diagnostics
+  // keeps coming when a simulated clock stops (a bag ended or paused) or
+  // jumps back (a looped bag), where a ROS timer and Updater::update() wait
+  // for the clock.
+  timer_ = node.createWallTimer(ros::WallDuration(0.1), [this](const ros::WallTimerEvent&) {
+    const ros::WallTime now = ros::WallTime::now();
+    if ((now - last_published_).toSec() < updater_.getPeriod()) return;
+    last_published_ = now;
+    updater_.force_update();
+  });
 }
 
 void SlamDiagnostics::addIteration(const ScanResult& result) {

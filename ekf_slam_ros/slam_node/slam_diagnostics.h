@@ -86,7 +86,8 @@ class SlamDiagnostics {
   const bool mecp_;
   Sources sources_;
   diagnostic_updater::Updater updater_;
-  ros::Timer timer_;
+  ros::WallTimer timer_;
+  ros::WallTime last_published_;
   std::deque<double> nis_window_;  // the last nis_window NIS values
   // Wall time of each input's processing, over the whole run.
   std::unique_ptr<ProcessingTimes> processing_times_ = std::make_unique<ProcessingTimes>();
