@@ -11,8 +11,48 @@
 #include <sstream>
 
 namespace ekf_slam {
+namespace {
 
-std::string writeFileAtomically(const std::string& path, const std::string& bytes) {
+// The file a write to `path` lands in: `path`, or the end of the chain of
+// symlinks it starts (a dangling one included: the write creates its target).
+std::string writeTarget(const std::string& path) {
+  std::string current = path;
+  for (int hop = 0; hop < 40; ++hop) {  // more: a loop, which the write then reports
+    struct stat status;
+    if (::lstat(current.c_str(), &status) != 0 || !S_ISLNK(status.st_mode)) return current;
+    std::string link(4096, '\0');
+    const ssize_t n = ::readlink(current.c_str(), link.data(), link.size());
+    if (n <= 0) return current;
+    link.resize(static_cast<size_t>(n));
+    if (link.front() != '/') {
+      const size_t slash = current.find_last_of('/');
+      if (slash != std::string::npos) link = current.substr(0, slash + 1) + link;
+    }
+    current = link;
+  }
+  return current;
+}
+
+const char* kindOf(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISFIFO(mode)) return "a pipe";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "a special file";
+}
+
+}  // namespace
+
+std::string writeTargetProblem(const std::string& path) {
+  struct stat status;
+  if (::stat(writeTarget(path).c_str(), &status) != 0 || S_ISREG(status.st_mode)) return "";
+  return path + ": is " + kindOf(status.st_mode) + ", not a regular file";
+}
+
+std::string writeFileAtomically(const std::string& path_given, const std::string& bytes) {
+  const std::string problem = writeTargetProblem(path_given);
+  if (!problem.empty()) return problem + " (nothing written)";
+  const std::string path = writeTarget(path_given);
   std::string temp = path + ".XXXXXX";
   const int fd = ::mkstemp(temp.data());
   if (fd < 0) return path + ": cannot create a temporary file beside it: " + std::strerror(errno);

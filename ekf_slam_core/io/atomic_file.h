@@ -8,9 +8,18 @@ namespace ekf_slam {
 // Writes `bytes` to a temporary file beside `path` (same filesystem, so the
 // rename is atomic), flushes it to the disk (fsync) and renames it over
 // `path`, mode 0644. An earlier file at `path` survives any failure (a full
-// disk, a crash) unchanged, and no temporary file is left behind. Returns
-// an empty string on success, else the problem with the path.
+// disk, a crash) unchanged, and no temporary file is left behind. A symlink
+// is written through: its target is replaced, the link stays. A path that
+// is not a regular file (writeTargetProblem) is refused before anything is
+// written. Returns an empty string on success, else the problem with the
+// path.
 std::string writeFileAtomically(const std::string& path, const std::string& bytes);
+
+// Empty when `path` (or the end of the symlinks it starts) is a regular
+// file or does not exist yet, else "<path>: is a directory, not a regular
+// file" (a device, a pipe, a socket): what writeFileAtomically refuses,
+// for a caller that writes several files to check them all first.
+std::string writeTargetProblem(const std::string& path);
 
 // The whole file; false when it cannot be opened or read.
 bool readWholeFile(const std::string& path, std::string* bytes);

@@ -18,15 +18,6 @@ bool parseDouble(const std::string& text, double* value) {
   return io_text::parseNumber(text, value) && std::isfinite(*value);
 }
 
-std::string imagePathFor(const std::string& yaml_path) {
-  const std::string suffix = ".yaml";
-  if (yaml_path.size() > suffix.size() &&
-      yaml_path.compare(yaml_path.size() - suffix.size(), suffix.size(), suffix) == 0) {
-    return yaml_path.substr(0, yaml_path.size() - suffix.size()) + ".pgm";
-  }
-  return yaml_path + ".pgm";
-}
-
 std::string directoryOf(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? "" : path.substr(0, slash + 1);
@@ -69,6 +60,15 @@ bool parseCount(const std::string& token, long* value) {
 }
 
 }  // namespace
+
+std::string imagePathFor(const std::string& yaml_path) {
+  const std::string suffix = ".yaml";
+  if (yaml_path.size() > suffix.size() &&
+      yaml_path.compare(yaml_path.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    return yaml_path.substr(0, yaml_path.size() - suffix.size()) + ".pgm";
+  }
+  return yaml_path + ".pgm";
+}
 
 std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) {
   const long cells = static_cast<long>(grid.width) * grid.height;

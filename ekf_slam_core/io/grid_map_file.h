@@ -35,6 +35,8 @@ constexpr long kMaxGridCells = 100000000;
 // file never names an image that is not complete. Values other than -1, 0
 // and 100 are written as map_server would threshold them.
 std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid);
+// The image writeGridMap writes beside `yaml_path`.
+std::string imagePathFor(const std::string& yaml_path);
 
 // Reads a map_server map (trinary mode; a binary PGM, P5). On error returns
 // "<path>: <problem>" and leaves `grid` untouched: a missing or unreadable

@@ -25,6 +25,7 @@
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_srvs/Trigger.h>
+#include <sys/stat.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <unistd.h>
 
@@ -768,6 +769,21 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   }
   addLines(&file);  // lines load too
   ASSERT_EQ(writeLandmarkMap(path, file), "");
+
+  // A save to a directory is refused before any file is written: the grid
+  // that would go beside it is not there either.
+  char folder[] = "/tmp/slam_node_save_XXXXXX";
+  ASSERT_NE(::mkdtemp(folder), nullptr);
+  const std::string taken = std::string(folder) + "/map.yaml";
+  ASSERT_EQ(::mkdir(taken.c_str(), 0755), 0);
+  ekf_slam::SaveMap to_folder;
+  to_folder.request.path = taken;
+  ASSERT_TRUE(call("save_map", &to_folder));
+  EXPECT_FALSE(to_folder.response.success);
+  EXPECT_NE(to_folder.response.message.find(taken + ": is a directory"), std::string::npos)
+      << to_folder.response.message;
+  EXPECT_EQ(::rmdir(taken.c_str()), 0);
+  EXPECT_EQ(::rmdir(folder), 0) << "the refused save wrote a file beside the directory";
 
   // Reset: an empty map.
   ASSERT_TRUE(trigger("reset"));

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ros_conversions/pose_conversion.h"
@@ -162,7 +163,18 @@ bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
   // The grid first: a failure leaves the landmark file as it was. Each file
   // is replaced atomically; a map saved without a grid drops the grid an
   // earlier save left at that path, so that a load never pairs the two.
+  // A path that is not a regular file (a directory, a device, a pipe) is
+  // refused before any file is written.
   const std::string grid_path = gridPathFor(request.path);
+  for (const std::string& path : {request.path, grid_path, imagePathFor(grid_path)}) {
+    const std::string problem = writeTargetProblem(path);
+    if (!problem.empty()) {
+      response.success = false;
+      response.message = problem + " (nothing saved)";
+      ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
+      return true;
+    }
+  }
   nav_msgs::OccupancyGrid grid;
   std::string grid_note;
   if (grids_.currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
