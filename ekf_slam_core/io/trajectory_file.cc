@@ -40,7 +40,10 @@ std::string writeTrajectory(const std::string& path, const std::vector<StampedPo
   for (const StampedPose& p : poses) {
     std::fprintf(f, "%.6f %.6f %.6f %.6f\n", p.stamp, p.pose.x, p.pose.y, p.pose.theta);
   }
-  return std::fclose(f) == 0 ? "" : path + ": write error";
+  // A write that failed on the way (a full disk) leaves the error flag;
+  // fclose reports only the last buffer's.
+  const bool failed = std::ferror(f) != 0;
+  return std::fclose(f) == 0 && !failed ? "" : path + ": write error";
 }
 
 }  // namespace ekf_slam

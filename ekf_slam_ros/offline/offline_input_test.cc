@@ -5,6 +5,7 @@
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
@@ -506,6 +507,24 @@ TEST_F(OfflineRunner, AGoodBagGivesAReportAndExitCodeZero) {
   EXPECT_EQ(run("--bag", &message), 0) << message;
   EXPECT_TRUE(reportExists());
   EXPECT_EQ(::access((out_ + "/trajectory_smoothed.txt").c_str(), R_OK), 0);
+}
+
+// Every output is checked: one that cannot be written (here a directory
+// where a trajectory goes) ends the run with a non-zero exit naming it, and
+// no report; a report that cannot be written is named too.
+TEST_F(OfflineRunner, AnOutputThatCannotBeWrittenExitsNonZeroNamingIt) {
+  writeBag(input_, true);
+  ASSERT_EQ(::mkdir((out_ + "/trajectory_smoothed.txt").c_str(), 0755), 0);
+  std::string message;
+  EXPECT_EQ(run("--bag", &message), 3);
+  EXPECT_NE(message.find("trajectory_smoothed.txt"), std::string::npos) << message;
+  EXPECT_FALSE(reportExists());
+
+  ASSERT_EQ(::rmdir((out_ + "/trajectory_smoothed.txt").c_str()), 0);
+  ::unlink((out_ + "/report.txt").c_str());
+  ASSERT_EQ(::mkdir((out_ + "/report.txt").c_str(), 0755), 0);
+  EXPECT_EQ(run("--bag", &message), 3);
+  EXPECT_NE(message.find("report.txt: is a directory"), std::string::npos) << message;
 }
 
 TEST(RealLogs, IntelScansComeInFileOrderWithOdometry) {

@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/io/trajectory_file.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
@@ -151,6 +152,7 @@ std::string writeFirstLastScans(const std::string& path, const ekf_slam::LogData
       }
     }
   }
+  out.close();  // a full disk shows when the last buffer is written
   return out ? "" : path + ": write error";
 }
 
@@ -172,6 +174,7 @@ std::string writeFilteredCovariances(const std::string& path, const ekf_slam::Sl
     out << stamp << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(0, 2) << ' ' << c(1, 1) << ' '
         << c(1, 2) << ' ' << c(2, 2) << '\n';
   }
+  out.close();
   return out ? "" : path + ": write error";
 }
 
@@ -675,7 +678,13 @@ int main(int argc, char** argv) {
   reportLandmarks(config, pipeline, report);
   reportSmoother(trajectories, report);
   reportTimes(log, secondsSince(wall_start), processing, report);
-  std::ofstream(args.out_dir + "/report.txt") << report.str();
   std::cout << report.str();
+  // Last, and whole or not at all: a report says the run's files are there.
+  const std::string report_error =
+      ekf_slam::writeFileAtomically(args.out_dir + "/report.txt", report.str());
+  if (!report_error.empty()) {
+    std::cerr << "ekf_slam_offline: " << report_error << "\n";
+    return 3;
+  }
   return 0;
 }
