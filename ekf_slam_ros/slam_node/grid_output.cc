@@ -9,6 +9,7 @@ GridOutput::GridOutput(ros::NodeHandle node, const SlamNodeParams& params,
                        const OccupancyGridOptions& map, bool live, const SlamControl& slam)
     : params_(params), slam_(slam) {
   map_publisher_ = node.advertise<nav_msgs::OccupancyGrid>("map", 1, /*latch=*/true);
+  metadata_publisher_ = node.advertise<nav_msgs::MapMetaData>("map_metadata", 1, /*latch=*/true);
   if (live) {
     live_map_ = std::make_unique<LiveMapPublisher>(node, map);
     map_timer_ =
@@ -53,6 +54,7 @@ bool GridOutput::currentGrid(nav_msgs::OccupancyGrid* map) const {
 
 void GridOutput::publish(const nav_msgs::OccupancyGrid& map) {
   map_publisher_.publish(map);
+  metadata_publisher_.publish(map.info);  // map_metadata always describes map
   node_grid_ = map;
   node_grid_time_ = std::chrono::steady_clock::now();
 }

@@ -9,6 +9,7 @@
 // node last published itself.
 #pragma once
 
+#include <nav_msgs/MapMetaData.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 
@@ -52,6 +53,7 @@ class GridOutput {
   const SlamNodeParams& params_;
   const SlamControl& slam_;
   ros::Publisher map_publisher_;
+  ros::Publisher metadata_publisher_;
   std::unique_ptr<LiveMapPublisher> live_map_;  // null when there is no live map
   ros::Timer map_timer_;
   long optimisations_mapped_ = -1;  // back-end optimisations seen by the last grid submitted

@@ -19,6 +19,7 @@
 #include <ekf_slam/SaveMap.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/MapMetaData.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
@@ -211,6 +212,7 @@ class Observer {
     // Every node publishes its log on /rosout directly (no rosout aggregator needed).
     subscribers_.push_back(node_.subscribe("/rosout", 500, &Observer::onLog, this));
     subscribers_.push_back(node_.subscribe("map", 1, &Observer::onGrid, this));
+    subscribers_.push_back(node_.subscribe("map_metadata", 1, &Observer::onMetadata, this));
     subscribers_.push_back(node_.subscribe("features", 10, &Observer::onFeatures, this));
     subscribers_.push_back(node_.subscribe("association", 10, &Observer::onAssociation, this));
     subscribers_.push_back(node_.subscribe("smoothed_path", 1, &Observer::onSmoothedPath, this));
@@ -272,6 +274,10 @@ class Observer {
     std::lock_guard<std::mutex> lock(mutex_);
     return grids_;
   }
+  nav_msgs::MapMetaData metadata() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return metadata_;
+  }
   ekf_slam::Features features() {
     std::lock_guard<std::mutex> lock(mutex_);
     return features_;
@@ -322,6 +328,10 @@ class Observer {
     grid_ = grid;
     ++grids_;
   }
+  void onMetadata(const nav_msgs::MapMetaData& metadata) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    metadata_ = metadata;
+  }
   void onFeatures(const ekf_slam::Features& features) {
     std::lock_guard<std::mutex> lock(mutex_);
     features_ = features;
@@ -350,6 +360,7 @@ class Observer {
   long other_lines_ = 0;
   nav_msgs::OccupancyGrid grid_;
   long grids_ = 0;
+  nav_msgs::MapMetaData metadata_;
   size_t smoothed_poses_ = 0;
 };
 
@@ -436,6 +447,23 @@ class SlamNodeTest : public ::testing::Test {
     ASSERT_EQ(readGridMap(save.response.grid_path, file), "");
     EXPECT_TRUE(sameGrid(shown, *file)) << "the saved grid is not the one on map";
   }
+  // map_metadata describes the grid on map (after ~smooth and load_map too,
+  // with or without the live map).
+  void expectMetadataOfTheShownGrid() {
+    EXPECT_TRUE(waitFor(
+        [&] {
+          const nav_msgs::MapMetaData m = observer_.metadata();
+          const nav_msgs::MapMetaData shown = observer_.grid().info;
+          return m.width == shown.width && m.height == shown.height &&
+                 m.resolution == shown.resolution &&
+                 m.origin.position.x == shown.origin.position.x &&
+                 m.origin.position.y == shown.origin.position.y;
+        },
+        5.0))
+        << "map_metadata " << observer_.metadata().width << " x " << observer_.metadata().height
+        << " does not describe the grid on map, " << observer_.grid().info.width << " x "
+        << observer_.grid().info.height;
+  }
   // ~smooth: a smoothed path with one pose per scan since the load, and a
   // grid with the room's walls and free space.
   void expectSmoothedGrid() {
@@ -454,6 +482,7 @@ class SlamNodeTest : public ::testing::Test {
     }
     EXPECT_GT(occupied, 50) << "the room's walls";
     EXPECT_GT(free_cells, occupied) << "the room's inside";
+    expectMetadataOfTheShownGrid();
   }
 
   Observer observer_;
@@ -885,6 +914,7 @@ TEST_F(SlamNodeTest, ABoundedHistoryStillSmoothsAndMapsTheWholeRoom) {
       << smooth.response.message;
   EXPECT_TRUE(waitFor([&] { return observer_.smoothedPoses() >= 30; }, 3.0));
   ASSERT_TRUE(waitFor([&] { return observer_.grid().info.width > 0; }, 3.0));
+  expectMetadataOfTheShownGrid();  // with loop closure off there is no live map
   // map → odom from the last published pose and the odometry at its stamp.
   const geometry_msgs::PoseWithCovarianceStamped pose = observer_.pose();
   const Pose2 map_pose(pose.pose.pose.position.x, pose.pose.pose.position.y,
@@ -950,6 +980,7 @@ TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
   ASSERT_TRUE(load.response.success) << load.response.message;
   ASSERT_TRUE(waitFor([&] { return observer_.grids() > grids_at_load; }, 5.0));
   EXPECT_TRUE(sameGrid(observer_.grid(), file)) << "the loaded grid differs from the saved one";
+  expectMetadataOfTheShownGrid();  // the loaded grid
   ASSERT_TRUE(trigger("resume"));
   ros::WallDuration(2.0).sleep();
   auto errorNow = [&](double* heading_error) {
