@@ -124,10 +124,7 @@ Outcome solvePoseGraphWithCeres(const PoseGraph& graph, const PoseGraphOptions& 
   Outcome best;
   best.solver = variant.name;
   for (int run = 0; run < repeats; ++run) {
-    std::vector<std::array<double, 3>> x(graph.nodeCount());
-    for (int i = 0; i < graph.nodeCount(); ++i) {
-      x[i] = {graph.pose(i).x, graph.pose(i).y, graph.pose(i).theta};
-    }
+    std::vector<std::array<double, 3>> x = ceres_costs::poseArrays(graph.poses());
     const auto start = Clock::now();
     ceres_costs::Kernels kernels(graph_options.robust_kernel_width);
     ceres::Problem::Options problem_options;
@@ -174,15 +171,8 @@ Outcome solveLandmarkGraphWithCeres(const LandmarkGraph& graph,
   Outcome best;
   best.solver = variant.name;
   for (int run = 0; run < repeats; ++run) {
-    std::vector<std::array<double, 3>> x(graph.poseCount());
-    std::vector<std::array<double, 2>> m(graph.landmarkCount());
-    for (int i = 0; i < graph.poseCount(); ++i) {
-      const Pose2& p = graph.poses()[i];
-      x[i] = {p.x, p.y, p.theta};
-    }
-    for (int j = 0; j < graph.landmarkCount(); ++j) {
-      m[j] = {graph.landmarks()[j].x(), graph.landmarks()[j].y()};
-    }
+    std::vector<std::array<double, 3>> x = ceres_costs::poseArrays(graph.poses());
+    std::vector<std::array<double, 2>> m = ceres_costs::landmarkArrays(graph.landmarks());
     const auto start = Clock::now();
     ceres_costs::Kernels kernels(graph_options.kernel_width);
     ceres::Problem::Options problem_options;

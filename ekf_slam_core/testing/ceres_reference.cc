@@ -53,6 +53,20 @@ int stepsOf(const ceres::Solver::Summary& summary) {
 
 namespace ceres_costs {
 
+std::vector<std::array<double, 3>> poseArrays(const std::vector<Pose2>& poses) {
+  std::vector<std::array<double, 3>> x;
+  x.reserve(poses.size());
+  for (const Pose2& p : poses) x.push_back({p.x, p.y, p.theta});
+  return x;
+}
+
+std::vector<std::array<double, 2>> landmarkArrays(const std::vector<Vector2>& landmarks) {
+  std::vector<std::array<double, 2>> m;
+  m.reserve(landmarks.size());
+  for (const Vector2& l : landmarks) m.push_back({l.x(), l.y()});
+  return m;
+}
+
 void addPoseGraph(const PoseGraph& graph, Kernels* kernels,
                   std::vector<std::array<double, 3>>* poses, ceres::Problem* problem) {
   std::vector<std::array<double, 3>>& x = *poses;
@@ -97,10 +111,7 @@ PoseGraph solveWithCeres(const PoseGraph& graph, const PoseGraphOptions& options
                          double function_tolerance, PoseGraphSummary* summary) {
   PoseGraph solved = graph;
   PoseGraphSummary report;
-  std::vector<std::array<double, 3>> x(graph.nodeCount());
-  for (int i = 0; i < graph.nodeCount(); ++i) {
-    x[i] = {graph.pose(i).x, graph.pose(i).y, graph.pose(i).theta};
-  }
+  std::vector<std::array<double, 3>> x = ceres_costs::poseArrays(graph.poses());
   ceres_costs::Kernels kernels(options.robust_kernel_width);
   ceres::Problem problem(problemOptions());
   ceres_costs::addPoseGraph(graph, &kernels, &x, &problem);
@@ -149,15 +160,8 @@ LandmarkGraph solveWithCeres(const LandmarkGraph& graph, const LandmarkGraphOpti
                              LandmarkGraphSummary* summary) {
   LandmarkGraphSummary report;
   report.initial_cost = graph.cost(options.kernel_width);
-  std::vector<std::array<double, 3>> x(graph.poseCount());
-  std::vector<std::array<double, 2>> m(graph.landmarkCount());
-  for (int i = 0; i < graph.poseCount(); ++i) {
-    const Pose2& p = graph.poses()[i];
-    x[i] = {p.x, p.y, p.theta};
-  }
-  for (int j = 0; j < graph.landmarkCount(); ++j) {
-    m[j] = {graph.landmarks()[j].x(), graph.landmarks()[j].y()};
-  }
+  std::vector<std::array<double, 3>> x = ceres_costs::poseArrays(graph.poses());
+  std::vector<std::array<double, 2>> m = ceres_costs::landmarkArrays(graph.landmarks());
   ceres_costs::Kernels kernels(options.kernel_width);
   ceres::Problem problem(problemOptions());
   ceres_costs::addLandmarkGraph(graph, &kernels, &x, &m, &problem);

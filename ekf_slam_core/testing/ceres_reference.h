@@ -139,6 +139,9 @@ struct Kernels {
 // comparison alike. Each unknown is an array (pose: x, y, θ; landmark: x, y)
 // the caller fills with the start and reads back; loss functions come from
 // `kernels` (the problem must not own them: DO_NOT_TAKE_OWNERSHIP).
+// The graph's values as those arrays.
+std::vector<std::array<double, 3>> poseArrays(const std::vector<Pose2>& poses);
+std::vector<std::array<double, 2>> landmarkArrays(const std::vector<Vector2>& landmarks);
 // Every active edge of `graph`; node 0 held constant.
 void addPoseGraph(const PoseGraph& graph, Kernels* kernels,
                   std::vector<std::array<double, 3>>* poses, ceres::Problem* problem);
