@@ -231,26 +231,9 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
   if (history_.add(r, scan) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
 }
 
-std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,
-                                                         LandmarkGraph* last_problem) const {
-  const std::vector<Pose2> initial = back_end_.loopClosedIterationPoses(history_);
-  const std::vector<IterationConstraint> loops = back_end_.loopConstraints(history_);
-  const FullSmootherRecorder& record = history_.smootherRecord();
-  FullSmootherResult result;
-  if (history_.firstIteration() > 0 && !initial.empty()) {
-    // A bounded history starts at its oldest iteration: anchored where the
-    // loop-closed graph has it (the frame of the older key scans), as
-    // uncertain as the filter was there.
-    FullSmootherRecorder window = record;
-    window.setPrior(initial.front(), record.priorCovariance());
-    result = smoothFull(window, filter_.filter(), loops, options_.smoother, &initial, last_problem);
-  } else {
-    result = smoothFull(record, filter_.filter(), loops, options_.smoother,
-                        initial.empty() ? nullptr : &initial, last_problem);
-  }
-  std::vector<StampedPose> out = history_.scanPosesFrom(result.poses);
-  if (details) *details = std::move(result);
-  return out;
+SmoothingProblem SlamPipeline::smoothingProblem() const {
+  return {history_, filter_.filter(), back_end_.loopConstraints(history_),
+          back_end_.loopClosedIterationPoses(history_), options_.smoother};
 }
 
 }  // namespace ekf_slam

@@ -43,6 +43,7 @@
 #include "ekf_slam_core/pipeline/pipeline_options.h"
 #include "ekf_slam_core/pipeline/scan_history.h"
 #include "ekf_slam_core/pipeline/scan_result.h"
+#include "ekf_slam_core/pipeline/smoothing_problem.h"
 
 namespace ekf_slam {
 
@@ -124,13 +125,17 @@ class SlamPipeline {
   // iteration, with odom → base_link the robot's raw odometry.
   Pose2 mapToOdom() const;
 
-  // Poses for every kept scan from the full smoother's iteration poses;
-  // with a bounded history the smoother is anchored at the oldest kept
-  // iteration. Runs the batch optimisation on every call; `details` (if
-  // given) receives its result, `last_problem` (if given) the problem of
-  // its last optimisation (see smoothFull).
+  // Poses for every kept scan from the full smoother's iteration poses
+  // (SmoothingProblem::solve). Runs the batch optimisation on every call;
+  // `details` (if given) receives its result, `last_problem` (if given) the
+  // problem of its last optimisation (see smoothFull).
   std::vector<StampedPose> smoothedScanPoses(FullSmootherResult* details = nullptr,
-                                             LandmarkGraph* last_problem = nullptr) const;
+                                             LandmarkGraph* last_problem = nullptr) const {
+    return smoothingProblem().solve(details, last_problem);
+  }
+  // The full smoother's problem as a copy (it waits for the back end's
+  // thread): to be solved elsewhere while the pipeline goes on.
+  SmoothingProblem smoothingProblem() const;
   std::vector<StampedPose> rtsScanPoses() const { return history_.rtsScanPoses(); }
   std::vector<StampedPose> filteredScanPoses() const { return history_.filteredScanPoses(); }
   // ScanRecord::causal for every scan: what a live run publishes.
