@@ -35,7 +35,8 @@ InputQueue::InputQueue(ros::NodeHandle node, const SlamNodeParams& params,
         [this](const Features::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
           onTransformsFailed(m.get(), reason);
         });
-    subscriber_ = node.subscribe(params_.features_topic, 50, &InputQueue::onFeatures, this);
+    subscriber_ = node.subscribe(params_.features_topic, params_.subscriber_queue_size,
+                                 &InputQueue::onFeatures, this);
   } else {
     scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
         transforms_.buffer(), params_.odom_frame, queue_size, node);
@@ -45,7 +46,8 @@ InputQueue::InputQueue(ros::NodeHandle node, const SlamNodeParams& params,
         [this](const sensor_msgs::LaserScan::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
           onTransformsFailed(m.get(), reason);
         });
-    subscriber_ = node.subscribe(params_.scan_topic, 50, &InputQueue::onScan, this);
+    subscriber_ = node.subscribe(params_.scan_topic, params_.subscriber_queue_size,
+                                 &InputQueue::onScan, this);
   }
   // Inputs waiting for a missing transform are given up after tf_timeout
   // even when no new scan arrives (e.g. the laser stops).

@@ -66,6 +66,8 @@ class InputQueue {
   // Forgets the last accepted stamp (a new map takes any stamp).
   void restartStampOrder() { last_accepted_stamp_.reset(); }
   long received() const { return received_; }
+  // Inputs waiting for their transforms now.
+  long waiting() const { return static_cast<long>(waiting_.size()); }
   std::string topic() const { return subscriber_.getTopic(); }
 
  private:

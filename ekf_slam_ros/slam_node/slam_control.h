@@ -27,6 +27,9 @@ class SlamControl {
   // made (the robot was driven while paused); nothing without a pipeline.
   virtual void acceptNextMotion() = 0;
   virtual ros::Time lastScanStamp() const = 0;
+  // Changes whenever the map restarts (~reset, a loaded map, an initial
+  // pose): a result computed from an older state is not published.
+  virtual long generation() const = 0;
   virtual bool localizeOnly() const = 0;
   // The pipeline's landmarks, else the loaded map waiting for it, else none.
   virtual std::optional<LandmarkMapFile> landmarks() const = 0;

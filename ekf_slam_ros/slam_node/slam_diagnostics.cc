@@ -191,6 +191,7 @@ void SlamDiagnostics::addCounts(const PipelineCounters& counters, long iteration
   status.add("localize only", sources_.slam->localizeOnly());
   status.add("relocalisations (initialpose)", sources_.services->relocalisations());
   status.add("scans received", sources_.input->received());
+  status.add("scans waiting for transforms", sources_.input->waiting());
   status.add("scans processed", pipeline ? counters.scans : 0L);
   status.add("processing time p50 [ms]", 1e3 * processing_times_->percentile(50.0));
   status.add("processing time p99 [ms]", 1e3 * processing_times_->percentile(99.0));

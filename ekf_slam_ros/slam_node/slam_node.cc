@@ -204,6 +204,7 @@ std::string SlamNode::setStartPose(const Pose2& pose, const Matrix3& covariance)
 
 void SlamNode::resetState() {
   pipeline_.reset();
+  ++generation_;
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
   outputs_.clear();
   grids_.restart();

@@ -2,8 +2,10 @@
 // (the same object the offline runner uses, so a bag gives the same answer
 // live and offline).
 //
-// Data flow per scan (all callbacks on one thread, ros::spin; tf arrives
-// through GuardedTfListener's thread, which refuses future stamps):
+// Data flow per scan (all callbacks on one thread, ros::spin, which owns
+// the SLAM state; tf arrives through GuardedTfListener's thread, which
+// refuses future stamps; the slow services run on their own, see
+// slam_services.h):
 //   scan → InputQueue: checks, the wait for odom → laser in a
 //          tf2_ros::MessageFilter, drops counted by reason (DropCounter)
 //        → [RearScanMerger: merged with the rear scan nearest in time]
@@ -62,6 +64,7 @@ class SlamNode : public SlamControl {
   const SlamPipeline* pipeline() const override { return pipeline_.get(); }
   void acceptNextMotion() override;
   ros::Time lastScanStamp() const override { return last_scan_stamp_; }
+  long generation() const override { return generation_; }
   bool localizeOnly() const override { return localize_only_; }
   std::optional<LandmarkMapFile> landmarks() const override;
   void dropWaitingInputs() override { input_.clear(); }
@@ -100,6 +103,7 @@ class SlamNode : public SlamControl {
   Matrix3 start_covariance_ = Matrix3::Zero();  // … and how sure that is
   bool localize_only_ = false;
   ros::Time last_scan_stamp_;  // of the last processed scan
+  long generation_ = 0;        // restarts of the map (SlamControl::generation)
 
   // The parts, in the order they are built (each may use those before it).
   ScanOutputs outputs_;

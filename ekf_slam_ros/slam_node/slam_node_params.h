@@ -39,8 +39,11 @@ struct SlamNodeParams {
   // scan_matching.enabled false, and ~smooth then has no scans for a grid.
   std::string input = "scan";
   std::string features_topic = "features";
-  double tf_timeout = 0.3;             // s a scan may wait for its transforms
-  int scan_queue_size = 30;            // scans waiting for tf at most (oldest dropped)
+  double tf_timeout = 0.3;   // s a scan may wait for its transforms
+  int scan_queue_size = 30;  // scans waiting for tf at most (oldest dropped)
+  // Inputs the subscription holds while the node is busy; ROS drops the
+  // oldest beyond it before the node sees them, so it is ample.
+  int subscriber_queue_size = 1000;
   double tf_cache_time = 10.0;         // s of transforms buffered (tf2's default)
   double transform_tolerance = 0.1;    // s map→odom is future-dated by
   double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
@@ -83,6 +86,8 @@ struct SlamNodeParams {
     v.text("features_topic", features_topic, {});
     v.number("tf_timeout", tf_timeout, Bounds::closed(0.0, 60.0, "s"));
     v.integer("scan_queue_size", scan_queue_size, Bounds::closed(1, 10000, "scans"));
+    v.integer("subscriber_queue_size", subscriber_queue_size,
+              Bounds::closed(1, 100000, "messages"));
     v.number("tf_cache_time", tf_cache_time, Bounds::closed(1.0, 3600.0, "s"));
     v.number("transform_tolerance", transform_tolerance, Bounds::closed(0.0, 10.0, "s"));
     v.number("tf_publish_rate", tf_publish_rate, Bounds::closed(0.1, 1000.0, "Hz"));

@@ -1,16 +1,25 @@
 #include "ekf_slam_ros/slam_node/slam_services.h"
 
 #include <nav_msgs/OccupancyGrid.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
+#include <boost/make_shared.hpp>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
+#include "ekf_slam_ros/slam_node/spin_thread.h"
 #include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
@@ -63,6 +72,75 @@ std::vector<SlamPipeline::KeyScan> keysAtSmoothedPoses(std::vector<SlamPipeline:
   return moved;
 }
 
+// What ~smooth needs of the SLAM state, copied on the spin thread.
+struct SmoothInput {
+  SmoothingProblem problem;
+  std::vector<SlamPipeline::KeyScan> keys;  // with readings; empty when the history keeps them
+  Pose2 laser;                              // base_link → laser
+  long iterations = 0;                      // the pipeline's, for the reply
+  long first_scan = 0;                      // of the kept history …
+  long recorded_scans = 0;                  // … and of the run
+  std_msgs::Header header;                  // the map frame at the last scan's stamp
+  long generation = 0;                      // SlamControl::generation
+};
+
+// ~smooth's path (into `path`) and grid; false without a grid (input:
+// features, or no key scan yet). `older_keys`: key scans older than the
+// smoothed scans (a bounded history), at their loop-closed poses. The
+// input's key scans are moved out.
+bool smoothedGrid(SmoothInput&& input, const std::vector<StampedPose>& smoothed,
+                  const std::string& map_frame, const OccupancyGridOptions& map_options,
+                  nav_msgs::Path* path, OccupancyGrid* grid, long* older_keys) {
+  auto addToPath = [&](double stamp, const Pose2& pose) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = ros::Time(stamp);
+    p.header.frame_id = map_frame;
+    p.pose = toPoseMessage(pose);
+    path->poses.push_back(p);
+  };
+  // With loop closure on, the grid is cast from the back end's key scans
+  // (the readings it keeps anyway) at their smoothed poses, and the history
+  // keeps no readings: memory grows with the key scans only. Key scans
+  // older than the smoothed scans keep their loop-closed poses, and lead
+  // the path.
+  const ScanHistory& history = input.problem.history;
+  std::vector<SlamPipeline::KeyScan> keys;
+  if (history.keptScans().empty()) keys = keysAtSmoothedPoses(std::move(input.keys), smoothed);
+  for (const SlamPipeline::KeyScan& key : keys) {
+    if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
+    addToPath(key.stamp, key.pose);
+    ++*older_keys;
+  }
+  // Without loop closure the history's kept scans are cast at their
+  // smoothed poses, over its grid of the scans older than them.
+  if (history.leftScansGrid()) *grid = *history.leftScansGrid();
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    addToPath(smoothed[i].stamp, smoothed[i].pose);
+    if (const KeptScan* kept = history.keptScan(input.first_scan + static_cast<long>(i))) {
+      grid->insertScan(compose(smoothed[i].pose, input.laser), kept->toScan());
+    }
+  }
+  if (history.keptScans().empty() && keys.empty()) return false;
+  if (!keys.empty()) *grid = gridFromKeyScans(keys, input.laser, map_options);
+  return true;
+}
+
+// Run first on the slow services' thread: it yields to the node's other
+// threads (nice +10, Linux's per-thread priority).
+class LowerPriority : public ros::CallbackInterface {
+ public:
+  CallResult call() override {
+    if (setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10) != 0) {
+      ROS_DEBUG("ekf_slam_node: the slow services' thread keeps its priority: %s",
+                std::strerror(errno));
+    }
+    return Success;
+  }
+};
+
+// The reply of a slow service that the node's shutdown interrupted.
+const char* const kShuttingDown = "the node is shutting down (nothing done)";
+
 std::string withoutLeadingSlash(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
@@ -79,10 +157,25 @@ SlamServices::SlamServices(ros::NodeHandle node, ros::NodeHandle private_node,
   services_.push_back(private_node.advertiseService("resume", &SlamServices::onResume, this));
   services_.push_back(private_node.advertiseService("step", &SlamServices::onStep, this));
   services_.push_back(private_node.advertiseService("reset", &SlamServices::onReset, this));
-  services_.push_back(private_node.advertiseService("smooth", &SlamServices::onSmooth, this));
-  services_.push_back(private_node.advertiseService("save_map", &SlamServices::onSaveMap, this));
-  services_.push_back(private_node.advertiseService("load_map", &SlamServices::onLoadMap, this));
+  ros::NodeHandle slow(private_node);
+  slow.setCallbackQueue(&slow_queue_);
+  services_.push_back(slow.advertiseService("smooth", &SlamServices::onSmooth, this));
+  services_.push_back(slow.advertiseService("save_map", &SlamServices::onSaveMap, this));
+  services_.push_back(slow.advertiseService("load_map", &SlamServices::onLoadMap, this));
   initial_pose_subscriber_ = node.subscribe("initialpose", 2, &SlamServices::onInitialPose, this);
+  slow_thread_ = std::make_unique<ros::AsyncSpinner>(1, &slow_queue_);
+  slow_thread_->start();
+  // The scans and tf go first when the machine is busy.
+  slow_queue_.addCallback(boost::make_shared<LowerPriority>());
+}
+
+SlamServices::~SlamServices() {
+  closing_ = true;
+  slow_thread_->stop();
+}
+
+bool SlamServices::onSpinThread(const std::function<void()>& work) const {
+  return runOnSpinThread(work, closing_);
 }
 
 std_msgs::Header SlamServices::mapHeader() const {
@@ -149,38 +242,45 @@ bool SlamServices::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
 }
 
 bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
+  response.success = false;
   if (request.path.empty()) {
-    response.success = false;
     response.message = "path is empty";
     return true;
   }
-  LandmarkMapFile map;
-  if (std::optional<LandmarkMapFile> landmarks = slam_.landmarks()) {
-    map = std::move(*landmarks);
-  } else {
-    map.frame = params_.map_frame;
-  }
-  // The grid first: a failure leaves the landmark file as it was. Each file
-  // is replaced atomically; a map saved without a grid drops the grid an
-  // earlier save left at that path, so that a load never pairs the two.
   // A path that is not a regular file (a directory, a device, a pipe) is
   // refused before any file is written.
   const std::string grid_path = gridPathFor(request.path);
   for (const std::string& path : {request.path, grid_path, imagePathFor(grid_path)}) {
     const std::string problem = writeTargetProblem(path);
     if (!problem.empty()) {
-      response.success = false;
       response.message = problem + " (nothing saved)";
       ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
       return true;
     }
   }
+  // The map as it stands now, copied on the spin thread; written here.
+  LandmarkMapFile map;
   nav_msgs::OccupancyGrid grid;
+  bool have_grid = false;
+  const bool copied = onSpinThread([&] {
+    if (std::optional<LandmarkMapFile> landmarks = slam_.landmarks()) {
+      map = std::move(*landmarks);
+    } else {
+      map.frame = params_.map_frame;
+    }
+    have_grid = grids_.currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0;
+  });
+  if (!copied) {
+    response.message = kShuttingDown;
+    return true;
+  }
+  // The grid first: a failure leaves the landmark file as it was. Each file
+  // is replaced atomically; a map saved without a grid drops the grid an
+  // earlier save left at that path, so that a load never pairs the two.
   std::string grid_note;
-  if (grids_.currentGrid(&grid) && grid.info.width > 0 && grid.info.height > 0) {
+  if (have_grid) {
     const std::string error = writeGridMap(grid_path, ros_conversions::toGridMapFile(grid));
     if (!error.empty()) {
-      response.success = false;
       response.message = error + " (nothing saved)";
       ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
       return true;
@@ -208,6 +308,7 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
     ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
     return true;
   };
+  // The files are read here, off the spin thread.
   LandmarkMapFile map;
   std::string error = readLandmarkMap(request.path, &map);
   if (!error.empty()) return refuse(error);
@@ -231,15 +332,21 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
   }
   // The filter restarts at the given pose (the map origin by default) with
   // the loaded landmarks as a prior, uncorrelated with the pose.
-  error = slam_.restart(start, start_covariance, map, request.localize_only);
+  bool localize_only = false;
+  const bool done = onSpinThread([&] {
+    error = slam_.restart(start, start_covariance, map, request.localize_only);
+    if (!error.empty()) return;
+    localize_only = slam_.localizeOnly();
+    const std_msgs::Header header = mapHeader();
+    outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
+    grids_.hold(false);
+    if (grid) {
+      grids_.publish(ros_conversions::toOccupancyGridMessage(*grid, header));
+      grids_.hold(localize_only);  // mapping on: the live map takes over
+    }
+  });
+  if (!done) return refuse(kShuttingDown);
   if (!error.empty()) return refuse("pose: " + error);
-  const std_msgs::Header header = mapHeader();
-  outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
-  grids_.hold(false);
-  if (grid) {
-    grids_.publish(ros_conversions::toOccupancyGridMessage(*grid, header));
-    grids_.hold(slam_.localizeOnly());  // mapping on: the live map takes over
-  }
   response.success = true;
   response.landmarks = static_cast<int>(map.size());
   std::ostringstream text;
@@ -248,7 +355,7 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
   text << landmarkCounts(map) << " loaded from " << request.path;
   if (grid) text << " and a " << grid->width << " x " << grid->height << " grid from " << grid_path;
   text << "; the robot starts at (" << start.x << ", " << start.y << ", " << radToDeg(start.theta)
-       << " deg)" << (slam_.localizeOnly() ? "; localisation only" : "; mapping continues");
+       << " deg)" << (localize_only ? "; localisation only" : "; mapping continues");
   response.message = text.str();
   ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
   return true;
@@ -282,84 +389,83 @@ void SlamServices::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped&
 }
 
 bool SlamServices::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-  const SlamPipeline* pipeline = slam_.pipeline();
-  if (!pipeline || pipeline->scans().empty()) {
-    response.success = false;
+  response.success = false;
+  // The problem and the readings, copied on the spin thread; solved here
+  // while the scans go on.
+  std::optional<SmoothInput> input;
+  const ros::WallTime asked = ros::WallTime::now();
+  const bool copied = onSpinThread([&] {
+    const SlamPipeline* pipeline = slam_.pipeline();
+    if (!pipeline || pipeline->scans().empty()) return;
+    input.emplace(SmoothInput{pipeline->smoothingProblem()});
+    // With loop closure on the history keeps no readings: the grid is cast
+    // from the back end's key scans.
+    if (input->problem.history.keptScans().empty()) input->keys = pipeline->keyScans(true);
+    input->laser = pipeline->options().filter.laser_pose;
+    input->iterations = pipeline->counters().iterations;
+    input->first_scan = pipeline->firstScan();
+    input->recorded_scans = pipeline->recordedScans();
+    input->header = mapHeader();
+    input->generation = slam_.generation();
+  });
+  ROS_DEBUG("ekf_slam_node: smooth: the state copied in %.3f s",
+            (ros::WallTime::now() - asked).toSec());
+  if (!copied) {
+    response.message = kShuttingDown;
+    return true;
+  }
+  if (!input) {
     response.message = "no scans processed yet";
     return true;
   }
   // With history_max_scans, the smoother covers the newest scans only.
-  const std::vector<StampedPose> smoothed = pipeline->smoothedScanPoses();
-  const std_msgs::Header header = mapHeader();
+  const std::vector<StampedPose> smoothed = input->problem.solve();
   nav_msgs::Path path;
-  path.header = header;
+  path.header = input->header;
   OccupancyGrid grid(map_options_);
   long older_keys = 0;
-  const bool have_grid = smoothedGrid(*pipeline, smoothed, &path, &grid, &older_keys);
-  outputs_.publishSmoothedPath(path);
+  const bool have_grid = smoothedGrid(std::move(*input), smoothed, params_.map_frame, map_options_,
+                                      &path, &grid, &older_keys);
+  std::optional<nav_msgs::OccupancyGrid> grid_message;
+  if (have_grid) grid_message = toOccupancyGridMessage(grid, input->header);
+  bool current = false;
+  const bool published = onSpinThread([&] {
+    current = slam_.generation() == input->generation;
+    if (!current) return;
+    outputs_.publishSmoothedPath(path);
+    if (grid_message) grids_.publish(*grid_message);
+  });
+  if (!published) {
+    response.message = kShuttingDown;
+    return true;
+  }
+  if (!current) {
+    response.message =
+        "the map restarted while it was smoothed (~reset, a loaded map or an "
+        "initial pose): nothing published";
+    ROS_WARN("ekf_slam_node: smooth: %s", response.message.c_str());
+    return true;
+  }
+  response.success = true;
   if (!have_grid) {
     // input: features: the node never saw the ranges a grid is cast from.
-    response.success = true;
     response.message = "smoothed " + std::to_string(smoothed.size()) +
                        " scan poses; no occupancy grid (no scans stored: input is features, "
                        "or no key scan yet)";
     ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
     return true;
   }
-  grids_.publish(toOccupancyGridMessage(grid, header));
-
   std::ostringstream text;
-  text << "smoothed " << smoothed.size() << " scan poses (" << pipeline->counters().iterations
-       << " iterations";
-  if (pipeline->firstScan() > 0) {
-    text << "; the newest " << smoothed.size() << " of " << pipeline->recordedScans()
+  text << "smoothed " << smoothed.size() << " scan poses (" << input->iterations << " iterations";
+  if (input->first_scan > 0) {
+    text << "; the newest " << smoothed.size() << " of " << input->recorded_scans
          << " scans, history_max_scans";
     if (older_keys > 0) text << ", before them " << older_keys << " loop-closed key scans";
   }
   text << "); map " << grid.width() << " x " << grid.height() << " cells at " << grid.resolution()
        << " m";
-  response.success = true;
   response.message = text.str();
   ROS_INFO("ekf_slam_node: smooth: %s", response.message.c_str());
-  return true;
-}
-
-bool SlamServices::smoothedGrid(const SlamPipeline& pipeline,
-                                const std::vector<StampedPose>& smoothed, nav_msgs::Path* path,
-                                OccupancyGrid* grid, long* older_keys) const {
-  auto addToPath = [&](double stamp, const Pose2& pose) {
-    geometry_msgs::PoseStamped p;
-    p.header.stamp = ros::Time(stamp);
-    p.header.frame_id = params_.map_frame;
-    p.pose = toPoseMessage(pose);
-    path->poses.push_back(p);
-  };
-  const Pose2 laser = pipeline.options().filter.laser_pose;
-  // With loop closure on, the grid is cast from the back end's key scans
-  // (the readings it keeps anyway) at their smoothed poses, and the history
-  // keeps no readings: memory grows with the key scans only. Key scans
-  // older than the smoothed scans keep their loop-closed poses, and lead
-  // the path.
-  const ScanHistory& history = pipeline.history();
-  std::vector<SlamPipeline::KeyScan> keys;
-  if (history.keptScans().empty()) keys = keysAtSmoothedPoses(pipeline.keyScans(true), smoothed);
-  for (const SlamPipeline::KeyScan& key : keys) {
-    if (smoothed.empty() || key.stamp >= smoothed.front().stamp) break;
-    addToPath(key.stamp, key.pose);
-    ++*older_keys;
-  }
-  // Without loop closure the history's kept scans are cast at their
-  // smoothed poses, over its grid of the scans older than them.
-  if (history.leftScansGrid()) *grid = *history.leftScansGrid();
-  const long first_record = pipeline.firstScan();
-  for (size_t i = 0; i < smoothed.size(); ++i) {
-    addToPath(smoothed[i].stamp, smoothed[i].pose);
-    if (const KeptScan* kept = history.keptScan(first_record + static_cast<long>(i))) {
-      grid->insertScan(compose(smoothed[i].pose, laser), kept->toScan());
-    }
-  }
-  if (history.keptScans().empty() && keys.empty()) return false;
-  if (!keys.empty()) *grid = gridFromKeyScans(keys, laser, map_options_);
   return true;
 }
 

@@ -3,16 +3,29 @@
 // ~load_map, and /initialpose. Each handler checks its request, asks the
 // SLAM state (SlamControl) for the change, and answers with what it did.
 //
-// Owns the service servers, the initial pose subscriber and the run state
-// they set: paused, a step pending, the counts of steps and restarts.
+// Threads: the quick handlers run on the spin thread with the scans. The
+// slow ones (~smooth: a batch solve; ~save_map, ~load_map: files) run on a
+// thread of their own, so that scans and map → odom keep flowing; they
+// copy what they need of the state on the spin thread (runOnSpinThread),
+// work on the copy, and hand the result back the same way. A result from a
+// map that restarted meanwhile is dropped, and the reply says so.
+//
+// Owns the service servers, the initial pose subscriber, the slow
+// services' queue and thread, and the run state the handlers set: paused,
+// a step pending, the counts of steps and restarts.
 #pragma once
 
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <ros/spinner.h>
 #include <std_srvs/Trigger.h>
 
+#include <atomic>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,6 +44,11 @@ class SlamServices {
   SlamServices(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,
                const OccupancyGridOptions& map, SlamControl& slam, ScanOutputs& outputs,
                GridOutput& grids);
+  // Stops the slow services' thread (a handler waiting for the spin
+  // thread gives up) before anything it uses goes.
+  ~SlamServices();
+  SlamServices(const SlamServices&) = delete;
+  SlamServices& operator=(const SlamServices&) = delete;
 
   bool paused() const { return paused_; }
   long steps() const { return steps_done_; }
@@ -54,19 +72,20 @@ class SlamServices {
   // The filter restarts at the given pose, the current landmarks (or the
   // loaded map) as its prior.
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);
-  // ~smooth's grid (the smoothed path is in `path`); false without one
-  // (input: features, or no key scan yet). `older_keys`: key scans older
-  // than the smoothed scans (a bounded history), at their loop-closed poses.
-  bool smoothedGrid(const SlamPipeline& pipeline, const std::vector<StampedPose>& smoothed,
-                    nav_msgs::Path* path, OccupancyGrid* grid, long* older_keys) const;
   std_msgs::Header mapHeader() const;  // the map frame, at the last scan's stamp
+  // A slow handler's access to the state: `work` runs on the spin thread.
+  // False (nothing done) when the node shuts down first.
+  bool onSpinThread(const std::function<void()>& work) const;
 
   const SlamNodeParams& params_;
   OccupancyGridOptions map_options_;
   SlamControl& slam_;
   ScanOutputs& outputs_;
   GridOutput& grids_;
+  ros::CallbackQueue slow_queue_;  // ~smooth, ~save_map, ~load_map
+  std::atomic<bool> closing_{false};
   std::vector<ros::ServiceServer> services_;
+  std::unique_ptr<ros::AsyncSpinner> slow_thread_;
   ros::Subscriber initial_pose_subscriber_;
   bool paused_ = false;
   bool step_pending_ = false;  // ~step: pause again after the next scan
