@@ -1,5 +1,6 @@
 #include "ros_conversions/pose_conversion.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ekf_slam {
@@ -33,6 +34,19 @@ Pose2 fromPoseMessage(const geometry_msgs::Pose& pose) {
 
 Pose2 fromTransformMessage(const geometry_msgs::Transform& transform) {
   return Pose2(transform.translation.x, transform.translation.y, yawOf(transform.rotation));
+}
+
+LaserMount laserMountOf(const geometry_msgs::Transform& transform) {
+  LaserMount mount;
+  mount.pose = fromTransformMessage(transform);
+  const geometry_msgs::Quaternion& q = transform.rotation;
+  // The laser's z axis in the base frame has z component R₂₂.
+  const double up = 1.0 - 2.0 * (q.x * q.x + q.y * q.y);
+  mount.inverted = up < 0.0;
+  mount.tilt = std::acos(std::min(1.0, std::abs(up)));
+  mount.roll = std::atan2(2.0 * (q.w * q.x + q.y * q.z), up);
+  mount.pitch = std::asin(std::max(-1.0, std::min(1.0, 2.0 * (q.w * q.y - q.z * q.x))));
+  return mount;
 }
 
 Matrix3 planarCovariance(const boost::array<double, 36>& covariance) {

@@ -24,6 +24,21 @@ geometry_msgs::Pose toPoseMessage(const Pose2& pose);
 Pose2 fromPoseMessage(const geometry_msgs::Pose& pose);
 Pose2 fromTransformMessage(const geometry_msgs::Transform& transform);
 
+// A planar laser's mount from its 3-D transform base → laser. `pose` is
+// planar: the translation and the heading of the laser's x axis (beam
+// 0°). `inverted`: the laser's z axis points down (roll or pitch near π),
+// so its bearings run clockwise seen from above (see mirroredScan). `tilt`:
+// the angle between its scan plane and the floor, 0 when level, upright or
+// inverted; `roll` and `pitch` (rad) for messages.
+struct LaserMount {
+  Pose2 pose;
+  bool inverted = false;
+  double tilt = 0.0;
+  double roll = 0.0;
+  double pitch = 0.0;
+};
+LaserMount laserMountOf(const geometry_msgs::Transform& transform);
+
 // The (x, y, yaw) block of a ROS 6×6 covariance (row-major, x y z roll
 // pitch yaw), and the block written into one (other entries untouched).
 Matrix3 planarCovariance(const boost::array<double, 36>& covariance);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <random>
 
 #include "ekf_slam_core/geometry/angle.h"
@@ -31,6 +33,69 @@ TEST(PoseConversion, HeadingsRoundTripThroughQuaternions) {
   q.z = std::sqrt(0.5);
   q.w = std::sqrt(0.5);
   EXPECT_NEAR(yawOf(q), kPi / 2.0, 1e-15);
+}
+
+geometry_msgs::Transform mountTransform(double roll, double pitch, double yaw) {
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+  geometry_msgs::Transform t;
+  t.translation.x = 0.16;
+  t.translation.y = -0.02;
+  t.translation.z = 0.3;
+  t.rotation.x = q.x();
+  t.rotation.y = q.y();
+  t.rotation.z = q.z();
+  t.rotation.w = q.w();
+  return t;
+}
+
+// The heading, seen from above, of the beam at bearing `alpha` in the
+// laser frame, through the full 3-D rotation.
+double beamHeading(const geometry_msgs::Transform& t, double alpha) {
+  const Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+  const Eigen::Vector3d beam = q * Eigen::Vector3d(std::cos(alpha), std::sin(alpha), 0.0);
+  return std::atan2(beam.y(), beam.x());
+}
+
+// A level laser, upright or upside down, at any heading: its beams point
+// where the planar pose (and, inverted, the mirrored bearing) says.
+TEST(PoseConversion, ALaserMountIsUprightOrInvertedWithTheHeadingOfItsBeams) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> angle(-kPi, kPi);
+  for (int i = 0; i < 200; ++i) {
+    const bool upside_down = i % 2 == 1;
+    // Upside down by roll π or by pitch π (the same mount, other yaw).
+    const double roll = upside_down && i % 4 == 1 ? kPi : 0.0;
+    const double pitch = upside_down && i % 4 == 3 ? kPi : 0.0;
+    const geometry_msgs::Transform t = mountTransform(roll, pitch, angle(rng));
+    const LaserMount mount = laserMountOf(t);
+    EXPECT_EQ(mount.inverted, upside_down);
+    EXPECT_NEAR(mount.tilt, 0.0, 1e-7);
+    EXPECT_EQ(mount.pose.x, 0.16);
+    EXPECT_EQ(mount.pose.y, -0.02);
+    for (double alpha : {-1.5, -0.4, 0.0, 0.9, 1.5}) {
+      const double seen = upside_down ? -alpha : alpha;
+      EXPECT_NEAR(wrapAngle(beamHeading(t, alpha) - (mount.pose.theta + seen)), 0.0, 1e-9)
+          << "roll " << roll << " pitch " << pitch << " bearing " << alpha;
+    }
+  }
+}
+
+TEST(PoseConversion, ATiltedMountGivesItsTiltRollAndPitch) {
+  const LaserMount pitched = laserMountOf(mountTransform(0.0, degToRad(10.0), 0.3));
+  EXPECT_FALSE(pitched.inverted);
+  EXPECT_NEAR(pitched.tilt, degToRad(10.0), 1e-12);
+  EXPECT_NEAR(pitched.pitch, degToRad(10.0), 1e-12);
+  EXPECT_NEAR(pitched.roll, 0.0, 1e-12);
+  EXPECT_NEAR(pitched.pose.theta, 0.3, 1e-12);
+  const LaserMount rolled = laserMountOf(mountTransform(degToRad(-4.0), 0.0, 0.0));
+  EXPECT_NEAR(rolled.tilt, degToRad(4.0), 1e-12);
+  EXPECT_NEAR(rolled.roll, degToRad(-4.0), 1e-12);
+  // Upside down and 5° off level.
+  const LaserMount inverted = laserMountOf(mountTransform(kPi - degToRad(5.0), 0.0, 0.0));
+  EXPECT_TRUE(inverted.inverted);
+  EXPECT_NEAR(inverted.tilt, degToRad(5.0), 1e-12);
 }
 
 TEST(PoseConversion, PlanarCovarianceIsTheXYYawBlock) {

@@ -1,5 +1,6 @@
 #include "ekf_slam_core/sensors/scan.h"
 
+#include <algorithm>
 #include <sstream>
 
 namespace ekf_slam {
@@ -8,6 +9,14 @@ int countValidReadings(const Scan& scan) {
   int count = 0;
   for (int i = 0; i < scan.size(); ++i) count += scan.isValid(i) ? 1 : 0;
   return count;
+}
+
+Scan mirroredScan(const Scan& scan) {
+  Scan mirrored = scan;
+  std::reverse(mirrored.ranges.begin(), mirrored.ranges.end());
+  const int last = std::max(scan.size() - 1, 0);
+  mirrored.angle_min = -(scan.angle_min + last * scan.angle_increment);
+  return mirrored;
 }
 
 std::string validateScan(const Scan& scan) {

@@ -39,6 +39,13 @@ struct Scan {
   }
 };
 
+// The scan a laser mounted upside down gives, as an upright laser at the
+// same place and heading would report it: a beam at bearing α in the
+// inverted laser's frame points at −α in the upright one. The beams are
+// reversed so that the bearings still increase; the ranges are untouched.
+// Mirroring twice gives the scan back.
+Scan mirroredScan(const Scan& scan);
+
 // Number of beams that carry a usable range.
 int countValidReadings(const Scan& scan);
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
 namespace ekf_slam {
@@ -27,6 +28,31 @@ TEST(Scan, InvalidReadingConvention) {
   EXPECT_EQ(countValidReadings(scan), 3);
   EXPECT_DOUBLE_EQ(scan.angle(0), -1.0);
   EXPECT_DOUBLE_EQ(scan.angle(3), 0.5);
+}
+
+// A beam at bearing α in an inverted laser's frame points at −α seen from
+// an upright laser: the mirrored scan's end points are the original's with
+// y negated, the bearings still increase, and mirroring twice is the scan.
+TEST(Scan, AMirroredScanSeesTheWorldReflectedAcrossTheLaserAxis) {
+  const Scan scan = makeScan({1.0, 2.0, std::numeric_limits<double>::quiet_NaN(), 4.0, 5.5});
+  const Scan mirrored = mirroredScan(scan);
+  ASSERT_EQ(mirrored.size(), scan.size());
+  EXPECT_GT(mirrored.angle_increment, 0.0);
+  for (int i = 0; i < scan.size(); ++i) {
+    const int j = scan.size() - 1 - i;  // the same beam in the mirrored scan
+    ASSERT_EQ(mirrored.isValid(j), scan.isValid(i));
+    if (!scan.isValid(i)) continue;
+    const double r = scan.ranges[i], m = mirrored.ranges[j];
+    EXPECT_NEAR(m * std::cos(mirrored.angle(j)), r * std::cos(scan.angle(i)), 1e-12);
+    EXPECT_NEAR(m * std::sin(mirrored.angle(j)), -r * std::sin(scan.angle(i)), 1e-12);
+  }
+  EXPECT_EQ(mirrored.stamp, scan.stamp);
+  EXPECT_EQ(mirrored.range_max, scan.range_max);
+  const Scan twice = mirroredScan(mirrored);
+  EXPECT_NEAR(twice.angle_min, scan.angle_min, 1e-15);
+  for (int i = 0; i < scan.size(); ++i) {
+    if (scan.isValid(i)) EXPECT_EQ(twice.ranges[i], scan.ranges[i]);
+  }
 }
 
 TEST(Scan, ValidationNamesTheBadField) {

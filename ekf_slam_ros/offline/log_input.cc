@@ -81,7 +81,8 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
   OdometryTrack track;
   const std::string odom_frame = stripSlash(options.odom_frame);
   const std::string base_frame = stripSlash(options.base_frame);
-  std::vector<std::pair<std::string, Pose2>> static_children;  // base_frame → child
+  // base_frame → child, in 3-D (an upside-down laser's scans are mirrored).
+  std::vector<std::pair<std::string, ros_conversions::LaserMount>> static_children;
   // odometry_source tf: the transforms also go into a tf2 buffer holding the
   // whole log, and each scan's odometry is looked up there as the live node
   // looks it up (tf2's interpolation, the same doubles), so that a replay
@@ -114,7 +115,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
         for (const auto& t : msg->transforms) {
           if (stripSlash(t.header.frame_id) != base_frame) continue;
           const std::string child = stripSlash(t.child_frame_id);
-          static_children.emplace_back(child, ros_conversions::fromTransformMessage(t.transform));
+          static_children.emplace_back(child, ros_conversions::laserMountOf(t.transform));
           static_mount |= child == laser_frame;
         }
       }
@@ -150,7 +151,7 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
             track.add(t.header.stamp.toSec(), pose);
             tf_buffer.setTransform(t, "bag");
           } else if (parent == base_frame && !static_mount) {
-            static_children.emplace_back(child, pose);
+            static_children.emplace_back(child, ros_conversions::laserMountOf(t.transform));
           }
         }
       }
@@ -168,11 +169,17 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
                 ? "topic " + options.odom_topic + " has no messages"
                 : "tf has no " + odom_frame + " -> " + base_frame + " transform");
   }
-  for (const auto& [child, pose] : static_children) {
+  for (const auto& [child, mount] : static_children) {
     if (child == data.laser_frame) {
-      data.laser_pose = pose;
+      data.laser_pose = mount.pose;
       data.laser_pose_found = true;
+      data.laser_inverted = mount.inverted;
     }
+  }
+  // As the live node does: an upside-down laser's scans, as an upright one
+  // at its place would see them.
+  if (data.laser_inverted) {
+    for (LoggedScan& s : data.scans) s.scan = mirroredScan(s.scan);
   }
   if (data.laser_frame == base_frame) data.laser_pose_found = true;  // laser at base_link
   track.finalize();

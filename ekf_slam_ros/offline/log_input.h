@@ -33,7 +33,8 @@ struct LoggedScan {
 struct LogData {
   std::vector<LoggedScan> scans;  // file order
   bool laser_pose_found = false;
-  Pose2 laser_pose;  // base_link → laser, when found in the log
+  Pose2 laser_pose;             // base_link → laser, when found in the log
+  bool laser_inverted = false;  // that laser upside down: its scans have been mirrored
   std::string laser_frame;
   long odometry_samples = 0;
   long odometry_gaps = 0;  // scans whose odometry was not interpolated

@@ -263,14 +263,16 @@ TEST(SlamConfig, ValidateAndTheLoaderReadTheSameBounds) {
 // its mount dynamically), or both.
 enum class MountOn { kTfStatic, kTf, kBoth };
 
-// base_link → laser, x metres ahead, as one tf message.
-tf2_msgs::TFMessage laserMount(double x, const ros::Time& stamp) {
+// base_link → laser, x metres ahead (upside down: rolled by π), as one tf
+// message.
+tf2_msgs::TFMessage laserMount(double x, const ros::Time& stamp, bool upside_down = false) {
   geometry_msgs::TransformStamped mount;
   mount.header.stamp = stamp;
   mount.header.frame_id = "base_link";
   mount.child_frame_id = "laser";
   mount.transform.translation.x = x;
-  mount.transform.rotation.w = 1.0;
+  mount.transform.rotation.w = upside_down ? 0.0 : 1.0;
+  mount.transform.rotation.x = upside_down ? 1.0 : 0.0;
   tf2_msgs::TFMessage message;
   message.transforms.push_back(mount);
   return message;
@@ -278,7 +280,7 @@ tf2_msgs::TFMessage laserMount(double x, const ros::Time& stamp) {
 
 // A small bag as the Freiburg logs are laid out: /scan, /odom, /tf_static.
 std::string writeBag(const std::string& path, bool with_odometry, int scans = 20,
-                     MountOn mount_on = MountOn::kTfStatic) {
+                     MountOn mount_on = MountOn::kTfStatic, bool upside_down = false) {
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   for (int i = 0; i < scans; ++i) {
     const ros::Time t(100.0 + 0.1 * i);
@@ -292,6 +294,7 @@ std::string writeBag(const std::string& path, bool with_odometry, int scans = 20
     scan.range_min = 0.1;
     scan.range_max = 80.0;
     scan.ranges.assign(180, 3.0);
+    scan.ranges.front() = 1.5;  // the first beam, on the laser's right
     bag.write("/scan", t, scan);
     if (with_odometry) {
       nav_msgs::Odometry odom;
@@ -303,7 +306,7 @@ std::string writeBag(const std::string& path, bool with_odometry, int scans = 20
     if (mount_on != MountOn::kTfStatic) bag.write("/tf", t, laserMount(0.20, t));
   }
   if (mount_on != MountOn::kTf)
-    bag.write("/tf_static", ros::Time(100.0), laserMount(0.16, ros::Time()));
+    bag.write("/tf_static", ros::Time(100.0), laserMount(0.16, ros::Time(), upside_down));
   bag.close();
   return path;
 }
@@ -338,6 +341,27 @@ TEST_F(TempBag, AMountOnlyOnTfIsFoundAndTfStaticGoesFirst) {
   ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
   EXPECT_TRUE(log.laser_pose_found);
   EXPECT_DOUBLE_EQ(log.laser_pose.x, 0.16) << "the declared static mount";
+}
+
+// An upside-down laser (base_link → laser rolled by π) sees the world
+// mirrored: its scans are read as an upright laser at its place sees them,
+// as the live node does.
+TEST_F(TempBag, AnUpsideDownLasersScansAreMirrored) {
+  writeBag(path_, true, 20, MountOn::kTfStatic, /*upside_down=*/true);
+  LogData log;
+  ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
+  EXPECT_TRUE(log.laser_inverted);
+  EXPECT_DOUBLE_EQ(log.laser_pose.x, 0.16);
+  EXPECT_NEAR(log.laser_pose.theta, 0.0, 1e-12);
+  const Scan& scan = log.scans[0].scan;
+  // The first beam measured (at −90° in the inverted laser) points at +90°.
+  EXPECT_EQ(scan.ranges.back(), 1.5);
+  EXPECT_NEAR(scan.angle(scan.size() - 1), M_PI / 2, 1e-6);
+  EXPECT_EQ(scan.ranges.front(), 3.0);
+  writeBag(path_, true);
+  ASSERT_EQ(readBag(path_, InputOptions(), &log), "");
+  EXPECT_FALSE(log.laser_inverted);
+  EXPECT_EQ(log.scans[0].scan.ranges.front(), 1.5);
 }
 
 TEST_F(TempBag, ABagWithoutOdometryIsRefusedByName) {

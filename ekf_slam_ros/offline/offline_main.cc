@@ -517,7 +517,7 @@ void reportInput(const Arguments& a, const ekf_slam::SlamConfig& config,
          << (config.laser_pose_given ? " (configuration)"
              : log.laser_pose_found  ? " (log)"
                                      : " (assumed)")
-         << "\n";
+         << (log.laser_inverted ? ", upside down in the log's tf: scans mirrored" : "") << "\n";
 }
 
 void reportFrontAndBackEnd(const ekf_slam::SlamConfig& config,

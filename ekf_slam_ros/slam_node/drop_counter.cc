@@ -26,6 +26,8 @@ const char* toString(DropReason reason) {
       return "paused";
     case DropReason::kBadFeatures:
       return "bad features";
+    case DropReason::kLaserUpsideDown:
+      return "features from an upside-down laser";
   }
   return "unknown";
 }

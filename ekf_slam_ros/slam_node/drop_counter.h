@@ -23,13 +23,14 @@ enum class DropReason {
   kQueueOverflow,          // more scans waiting for tf than scan_queue_size
   kPaused,                 // the pause service was called
   kBadFeatures,            // a features message with unknown kinds or unusable values
+  kLaserUpsideDown,        // features (input: features) from a laser mounted upside down
 };
 constexpr DropReason kAllDropReasons[] = {
     DropReason::kStampNotIncreasing,   DropReason::kStampInFuture,
     DropReason::kTooFewValidReadings,  DropReason::kBadScanGeometry,
     DropReason::kOdomTransformMissing, DropReason::kLaserTransformMissing,
     DropReason::kQueueOverflow,        DropReason::kPaused,
-    DropReason::kBadFeatures,
+    DropReason::kBadFeatures,          DropReason::kLaserUpsideDown,
 };
 const char* toString(DropReason reason);
 

@@ -184,19 +184,37 @@ void InputQueue::releaseInOrder() {
 void InputQueue::release(const PendingInput& pending) {
   const ros::Time stamp = pending.header.stamp;
   std::ostringstream detail = detailStream();
-  Pose2 odometry, laser;
+  Pose2 odometry;
   std::string why;
   if (!transforms_.lookup(params_.odom_frame, params_.base_frame, stamp, &odometry, &why)) {
     detail << "scan at " << stamp.toSec() << ": " << why << "; the map is not touched";
     drops_.drop(DropReason::kOdomTransformMissing, detail.str());
     return;
   }
-  if (!transforms_.lookup(params_.base_frame, pending.header.frame_id, stamp, &laser, &why)) {
+  ros_conversions::LaserMount mount;
+  if (!transforms_.lookupMount(params_.base_frame, pending.header.frame_id, stamp, &mount, &why)) {
     detail << "scan at " << stamp.toSec() << ": " << why << "; the map is not touched";
     drops_.drop(DropReason::kLaserTransformMissing, detail.str());
     return;
   }
-  hooks_.released(pending, odometry, laser);
+  if (!mount.inverted) {
+    PendingInput released = pending;
+    released.mount = mount;
+    hooks_.released(released, odometry, mount.pose);
+    return;
+  }
+  if (!pending.scan) {
+    detail << "features at " << stamp.toSec() << ": " << params_.base_frame << " -> "
+           << pending.header.frame_id
+           << " is upside down (its z axis points down); features extracted from such a scan "
+              "see the world mirrored: use input: scan, which mirrors the scan first";
+    drops_.drop(DropReason::kLaserUpsideDown, detail.str());
+    return;
+  }
+  PendingInput mirrored = pending;
+  mirrored.mount = mount;
+  mirrored.scan = mirroredScan(*pending.scan);
+  hooks_.released(mirrored, odometry, mount.pose);
 }
 
 void InputQueue::onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason) {

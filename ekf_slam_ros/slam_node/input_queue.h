@@ -7,7 +7,10 @@
 // and counted); odometry that has paused (logs record only motion) is
 // waited for until its next sample. Inputs leave in arrival order: a ready
 // one waits for the older ones. Each input released goes to the `released`
-// hook with odom → base_link and base_link → its frame at its stamp.
+// hook with odom → base_link and base_link → its frame at its stamp; a scan
+// from a laser mounted upside down (its z axis down in tf) is mirrored
+// first, so that the map is not (features from one are dropped: their
+// extractor saw the mirrored world).
 //
 // Owns the input subscriber, both message filters, the waiting queue and
 // the clock checks; counts every drop in the DropCounter it is given.
@@ -30,6 +33,7 @@
 #include "ekf_slam_ros/slam_node/drop_counter.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 #include "ekf_slam_ros/slam_node/transform_source.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 
@@ -43,6 +47,9 @@ struct PendingInput {
   const void* message = nullptr;  // the message the filter holds (identity only)
   bool ready = false;             // its transforms exist; processed once the older ones are
   bool expired = false;           // dropped and counted; ignored on release
+  // base_link → laser in 3-D at the stamp, set on release. An inverted
+  // laser's scan has been mirrored by then (mirroredScan).
+  ros_conversions::LaserMount mount;
 };
 
 class InputQueue {

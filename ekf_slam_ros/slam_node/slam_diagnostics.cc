@@ -164,6 +164,15 @@ void SlamDiagnostics::summarise(long drops, long alone, bool nis_inside,
                                 DiagnosticStatusWrapper& status) const {
   if (sources_.services->paused()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused");
+  } else if (!laser_frame_.empty() && laser_mount_.tilt > params_.max_laser_tilt) {
+    std::ostringstream text;
+    text.setf(std::ios::fixed);
+    text.precision(1);
+    text << params_.base_frame << " -> " << laser_frame_ << " is tilted "
+         << radToDeg(laser_mount_.tilt) << " deg from level (roll " << radToDeg(laser_mount_.roll)
+         << ", pitch " << radToDeg(laser_mount_.pitch) << " deg; max_laser_tilt "
+         << radToDeg(params_.max_laser_tilt) << "): the scan plane is not the floor's";
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, text.str());
   } else if (drops > drops_at_last_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    std::to_string(drops - drops_at_last_) +
@@ -215,6 +224,10 @@ void SlamDiagnostics::addCounts(const PipelineCounters& counters, long iteration
   status.add("rejected by filter: bad input", counters.bad_input);
   status.add("rejected by filter: update refused", counters.update_failures);
   status.add("laser pose changes", laser_pose_changes_);
+  if (!laser_frame_.empty()) {
+    status.add("laser mount", laser_mount_.inverted ? "upside down (scans mirrored)" : "upright");
+    status.addf("laser tilt [deg]", "%.2f", radToDeg(laser_mount_.tilt));
+  }
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
   // What the node's heap holds (allocated chunks, mmapped ones included),
   // as against the resident set, which also counts the pages the allocator

@@ -25,6 +25,7 @@
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 #include "ekf_slam_ros/slam_node/slam_services.h"
 #include "ekf_slam_ros/slam_node/transform_source.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 
@@ -62,6 +63,11 @@ class SlamDiagnostics {
   // An iteration's NIS values, into the window.
   void addIteration(const ScanResult& result);
   void countLaserPoseChange() { ++laser_pose_changes_; }
+  // The mount of the laser (`frame`) at the last input processed.
+  void noteLaserMount(const std::string& frame, const ros_conversions::LaserMount& mount) {
+    laser_frame_ = frame;
+    laser_mount_ = mount;
+  }
   // A new pipeline: the NIS window and the iteration rate start again.
   void restart();
 
@@ -96,6 +102,8 @@ class SlamDiagnostics {
   long drops_at_last_ = 0;
   long alone_at_last_ = 0;
   long laser_pose_changes_ = 0;
+  std::string laser_frame_;  // empty before the first input
+  ros_conversions::LaserMount laser_mount_;
 };
 
 }  // namespace ekf_slam

@@ -81,9 +81,10 @@ void SlamNode::ensurePipeline(const PendingInput& pending, const Pose2& laser) {
     createPipeline(laser_pose_ ? *laser_pose_ : laser);
     ROS_INFO(
         "ekf_slam_node: started; laser pose %s -> %s: %.3f m, %.3f m, "
-        "%.2f deg%s",
+        "%.2f deg%s%s",
         params_.base_frame.c_str(), pending.header.frame_id.c_str(), laser_pose_->x, laser_pose_->y,
         radToDeg(laser_pose_->theta),
+        pending.mount.inverted ? ", upside down (each scan is mirrored)" : "",
         !params_.rear_scan_topic.empty()
             ? " (the merged front and rear scans' virtual laser)"
             : (config_.laser_pose_given ? " (configuration)" : " (tf)"));
@@ -134,6 +135,16 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
 
 void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const Pose2& laser) {
   ensurePipeline(pending, laser);
+  diagnostics_.noteLaserMount(pending.header.frame_id, pending.mount);
+  if (pending.mount.tilt > params_.max_laser_tilt) {
+    ROS_WARN_THROTTLE(30.0,
+                      "ekf_slam_node: %s -> %s is tilted %.1f deg from level (roll %.1f, pitch "
+                      "%.1f deg; max_laser_tilt %.1f deg): the scan plane is not the floor's, "
+                      "walls are seen at other heights; fix the mount or its transform",
+                      params_.base_frame.c_str(), pending.header.frame_id.c_str(),
+                      radToDeg(pending.mount.tilt), radToDeg(pending.mount.roll),
+                      radToDeg(pending.mount.pitch), radToDeg(params_.max_laser_tilt));
+  }
   // Times the rest of this function: the pipeline and the publication.
   const SlamDiagnostics::Timing timing = diagnostics_.timeProcessing();
   const ros::Time stamp = pending.header.stamp;

@@ -49,13 +49,16 @@ struct SlamNodeParams {
   double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
   int min_valid_readings = 10;         // fewer usable ranges: the scan is rejected
   double laser_pose_tolerance = 0.01;  // m / rad: larger base_link→laser change warns
-  int nis_window = 100;                // matches in the NIS average on /diagnostics
-  double ellipse_probability = 0.95;   // of the covariance ellipses drawn
-  bool localize_only = false;          // start without adding landmarks
-  bool start_paused = false;           // drop scans until ~resume (a recorder can start first)
-  std::string initial_map;             // landmark map file loaded at start ("" none)
-  double diagnostic_period = 1.0;      // s
-  int path_max_poses = 10000;          // newest poses in `path` (0: all)
+  // rad: a scan plane tilted further from the floor's (roll or pitch of
+  // base_link → laser, upright or upside down) is reported on /diagnostics.
+  double max_laser_tilt = 0.035;
+  int nis_window = 100;               // matches in the NIS average on /diagnostics
+  double ellipse_probability = 0.95;  // of the covariance ellipses drawn
+  bool localize_only = false;         // start without adding landmarks
+  bool start_paused = false;          // drop scans until ~resume (a recorder can start first)
+  std::string initial_map;            // landmark map file loaded at start ("" none)
+  double diagnostic_period = 1.0;     // s
+  int path_max_poses = 10000;         // newest poses in `path` (0: all)
   // Newest scans whose history ~smooth re-solves (0: every scan, memory
   // then grows with the run). Older scans live on in the key scans (loop
   // closure on) or in an occupancy grid of their own (off).
@@ -93,6 +96,7 @@ struct SlamNodeParams {
     v.number("tf_publish_rate", tf_publish_rate, Bounds::closed(0.1, 1000.0, "Hz"));
     v.integer("min_valid_readings", min_valid_readings, Bounds::closed(2, 100000, "readings"));
     v.number("laser_pose_tolerance", laser_pose_tolerance, Bounds::closed(0.0, 10.0, "m, rad"));
+    v.number("max_laser_tilt", max_laser_tilt, Bounds::closed(0.0, 1.6, "rad"));
     v.integer("nis_window", nis_window, Bounds::closed(1, 1000000, "matches"));
     v.number("ellipse_probability", ellipse_probability, Bounds::closed(0.01, 0.9999));
     v.flag("localize_only", localize_only);

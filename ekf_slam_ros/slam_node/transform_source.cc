@@ -23,10 +23,27 @@ std::optional<ros::Time> TransformSource::latestStamp(const std::string& target,
 bool TransformSource::lookup(const std::string& target, const std::string& source,
                              const ros::Time& stamp, Pose2* pose, std::string* why,
                              bool* behind) const {
+  geometry_msgs::Transform transform;
+  if (!lookup(target, source, stamp, &transform, why, behind)) return false;
+  *pose = ros_conversions::fromTransformMessage(transform);
+  return true;
+}
+
+bool TransformSource::lookupMount(const std::string& target, const std::string& source,
+                                  const ros::Time& stamp, ros_conversions::LaserMount* mount,
+                                  std::string* why) const {
+  geometry_msgs::Transform transform;
+  if (!lookup(target, source, stamp, &transform, why, nullptr)) return false;
+  *mount = ros_conversions::laserMountOf(transform);
+  return true;
+}
+
+bool TransformSource::lookup(const std::string& target, const std::string& source,
+                             const ros::Time& stamp, geometry_msgs::Transform* transform,
+                             std::string* why, bool* behind) const {
   if (behind) *behind = false;
   const auto attempt = [&]() {
-    *pose = ros_conversions::fromTransformMessage(
-        buffer_.lookupTransform(target, source, stamp).transform);
+    *transform = buffer_.lookupTransform(target, source, stamp).transform;
   };
   try {
     attempt();

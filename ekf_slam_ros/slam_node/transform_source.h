@@ -11,6 +11,7 @@
 
 #include "ekf_slam_core/geometry/pose2.h"
 #include "ekf_slam_ros/slam_node/guarded_tf_listener.h"
+#include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
 
@@ -26,6 +27,9 @@ class TransformSource {
   // its publisher is alive and the scan waits for the next sample.
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
               Pose2* pose, std::string* why, bool* behind = nullptr) const;
+  // The same for a laser's mount (3-D: upright, inverted, tilt).
+  bool lookupMount(const std::string& target, const std::string& source, const ros::Time& stamp,
+                   ros_conversions::LaserMount* mount, std::string* why) const;
   // The stamp of the newest target → source, if there is one.
   std::optional<ros::Time> latestStamp(const std::string& target, const std::string& source) const;
 
@@ -41,6 +45,9 @@ class TransformSource {
   long refusedInvalid() const { return listener_.refusedInvalid(); }
 
  private:
+  bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+              geometry_msgs::Transform* transform, std::string* why, bool* behind) const;
+
   double cache_time_;
   tf2_ros::Buffer buffer_;
   GuardedTfListener listener_;  // fills buffer_ from its own thread
