@@ -20,7 +20,7 @@ std::vector<uint8_t> scanTelegram(int count) {
   std::vector<uint16_t> raw(count);
   for (auto& r : raw) r = static_cast<uint16_t>(range(rng));
   return encodeTelegram(kSensorAddress, cmd::kMeasuredValues,
-                        buildMeasuredValuesData(raw, Units::kMillimetres, 0, 0));
+                        buildMeasuredValuesData(raw, Units::kMillimetres, 0x10));
 }
 
 void BM_Crc16(benchmark::State& state) {

@@ -233,8 +233,8 @@ void Lms200Emulator::sendScan(double first_beam_time) {
     raw[i] = rawFromRange(measured, units);
     truth.sent[i] = rangeFromRaw(raw[i], units);
   }
-  std::vector<uint8_t> telegram = encodeTelegram(
-      kSensorAddress, cmd::kMeasuredValues, buildMeasuredValuesData(raw, units, 0, status_byte_));
+  std::vector<uint8_t> telegram = encodeTelegram(kSensorAddress, cmd::kMeasuredValues,
+                                                 buildMeasuredValuesData(raw, units, status_byte_));
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   if (options_.bad_crc_rate > 0.0 && uniform(rng_) < options_.bad_crc_rate) {
     telegram[telegram.size() - 2] ^= 0x5A;

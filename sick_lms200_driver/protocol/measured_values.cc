@@ -68,7 +68,8 @@ bool parseMeasuredValues(const Telegram& telegram, MeasuredValues* values, std::
              " data bytes, telegram has " + std::to_string(data.size());
     return false;
   }
-  values->partial_index = (info >> 11) & 0x03;
+  values->partial_offset_quarters = (info >> 11) & 0x03;
+  values->partial_scan = ((info >> 13) & 0x01) != 0;
   values->units = unit_bits == 1 ? Units::kMillimetres : Units::kCentimetres;
   values->raw.resize(count);
   values->flags.resize(count);
@@ -83,12 +84,14 @@ bool parseMeasuredValues(const Telegram& telegram, MeasuredValues* values, std::
   return true;
 }
 
-std::vector<uint8_t> buildMeasuredValuesData(const std::vector<uint16_t>& raw, Units units,
-                                             int partial_index, uint8_t status) {
+namespace {
+
+std::vector<uint8_t> measuredValuesData(const std::vector<uint16_t>& raw, Units units,
+                                        uint16_t partial_bits, uint8_t status) {
   std::vector<uint8_t> data;
   data.reserve(3 + 2 * raw.size());
-  const uint16_t info = static_cast<uint16_t>(
-      (raw.size() & 0x03FF) | ((partial_index & 0x03) << 11) | (static_cast<int>(units) << 14));
+  const uint16_t info =
+      static_cast<uint16_t>((raw.size() & 0x03FF) | partial_bits | (static_cast<int>(units) << 14));
   data.push_back(static_cast<uint8_t>(info & 0xFF));
   data.push_back(static_cast<uint8_t>(info >> 8));
   for (uint16_t value : raw) {
@@ -99,10 +102,29 @@ std::vector<uint8_t> buildMeasuredValuesData(const std::vector<uint16_t>& raw, U
   return data;
 }
 
-int partialBeamCount(int angle_deg, int resolution_centideg, int partial_index) {
-  const int offset = partial_index * resolution_centideg;  // 0.01°
+}  // namespace
+
+std::vector<uint8_t> buildMeasuredValuesData(const std::vector<uint16_t>& raw, Units units,
+                                             uint8_t status) {
+  return measuredValuesData(raw, units, 0, status);
+}
+
+std::vector<uint8_t> buildPartialScanData(const std::vector<uint16_t>& raw, Units units,
+                                          int offset_quarters, uint8_t status) {
+  const uint16_t bits = static_cast<uint16_t>(((offset_quarters & 0x03) << 11) | (1 << 13));
+  return measuredValuesData(raw, units, bits, status);
+}
+
+int partialBeamCount(int angle_deg, int resolution_centideg, int k) {
+  const int offset = k * resolution_centideg;  // 0.01°
   if (offset > angle_deg * 100) return 0;
   return (angle_deg * 100 - offset) / 100 + 1;
+}
+
+int partialForOffset(int resolution_centideg, int offset_quarters) {
+  const int offset = offset_quarters * 25;  // 0.01°
+  if (offset < 0 || offset >= 100 || offset % resolution_centideg != 0) return -1;
+  return offset / resolution_centideg;
 }
 
 InterlaceAssembler::InterlaceAssembler(int angle_deg, int resolution_centideg)
@@ -111,9 +133,9 @@ InterlaceAssembler::InterlaceAssembler(int angle_deg, int resolution_centideg)
       partials_(100 / resolution_centideg) {}
 
 bool InterlaceAssembler::add(const MeasuredValues& partial, std::vector<float>* full) {
-  const int k = partial.partial_index;
-  const int expected_count = partialBeamCount(angle_deg_, resolution_centideg_, k);
-  if (k >= partials_ || static_cast<int>(partial.ranges.size()) != expected_count) {
+  const int k = partialForOffset(resolution_centideg_, partial.partial_offset_quarters);
+  const int expected_count = k < 0 ? -1 : partialBeamCount(angle_deg_, resolution_centideg_, k);
+  if (k < 0 || static_cast<int>(partial.ranges.size()) != expected_count) {
     if (expected_next_ != 0) dropped_++;
     expected_next_ = 0;
     dropped_++;

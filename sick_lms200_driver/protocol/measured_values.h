@@ -2,8 +2,9 @@
 // interlaced partial scans.
 //
 // Data layout (after the 0xB0 command byte):
-//   info word u16 LE: bits 0-9 value count (<= 721), bits 11-12 partial-scan
-//   index, bits 14-15 units (0 = cm, 1 = mm);
+//   info word u16 LE: bits 0-9 value count (<= 721), bits 11-12 where a
+//   partial scan starts (0.25° steps), bit 13 set for a partial scan, bits
+//   14-15 units (0 = cm, 1 = mm);
 //   count words u16 LE: bits 0-12 the range, bits 13-15 flags;
 //   one status byte.
 // Ranges are converted to metres following REP-117: codes meaning "no return"
@@ -50,7 +51,12 @@ constexpr uint8_t kStatusContaminationBit = 0x80;  // optics dirty (warning)
 std::string describeStatus(uint8_t status);
 
 struct MeasuredValues {
-  int partial_index = 0;  // 0 for full scans
+  // Bit 13 of the info word: the telegram holds one partial scan of an
+  // interlaced sweep (mode 0x2A); false for complete scans.
+  bool partial_scan = false;
+  // Bits 11-12: where a partial scan starts, in 0.25° steps after the first
+  // beam of a complete scan (0 = 0°, 1 = 0.25°, 2 = 0.5°, 3 = 0.75°).
+  int partial_offset_quarters = 0;
   Units units = Units::kMillimetres;
   std::vector<uint16_t> raw;   // 13-bit ranges in wire order
   std::vector<uint8_t> flags;  // bits 13-15 of each word, shifted to 0-2
@@ -62,14 +68,26 @@ struct MeasuredValues {
 // problem in *error; *values is then unspecified.
 bool parseMeasuredValues(const Telegram& telegram, MeasuredValues* values, std::string* error);
 
-// Builds the data bytes of an 0xB0 telegram (emulator and tests).
+// Data bytes of an 0xB0 telegram holding a complete scan (emulator and tests).
 std::vector<uint8_t> buildMeasuredValuesData(const std::vector<uint16_t>& raw, Units units,
-                                             int partial_index, uint8_t status);
+                                             uint8_t status);
+// Data bytes of an 0xB0 telegram holding one partial scan that starts
+// `offset_quarters` × 0.25° after the first beam of a complete scan.
+std::vector<uint8_t> buildPartialScanData(const std::vector<uint16_t>& raw, Units units,
+                                          int offset_quarters, uint8_t status);
 
 // Partial scans of an interlaced sweep (mode 0x2A): with resolution r and
-// n = 1°/r partials, partial k holds the beams at k·r + j·1° (j = 0, 1, ...).
+// n = 1°/r partials, partial k (0 <= k < n) holds the beams at k·r + j·1°
+// (j = 0, 1, ...), measured in one mirror turn.
 // Number of beams of partial k in a sweep of `angle_deg` degrees.
-int partialBeamCount(int angle_deg, int resolution_centideg, int partial_index);
+int partialBeamCount(int angle_deg, int resolution_centideg, int k);
+// The telegram's offset field (0.25° steps) of partial k.
+inline int partialOffsetQuarters(int resolution_centideg, int k) {
+  return k * resolution_centideg / 25;
+}
+// Inverse: k, or -1 when the offset is not a whole number of resolution
+// steps below 1°.
+int partialForOffset(int resolution_centideg, int offset_quarters);
 
 class InterlaceAssembler {
  public:
@@ -78,7 +96,8 @@ class InterlaceAssembler {
 
   // Adds one partial scan. Returns true and fills *full (beams in angular
   // order) when the last partial of a complete, in-order set arrived. Out of
-  // order or wrongly sized partials restart the set (counted in dropped()).
+  // order or wrongly sized partials, and offsets that are no multiple of the
+  // resolution, restart the set (counted in dropped()).
   bool add(const MeasuredValues& partial, std::vector<float>* full);
 
   int partialsPerScan() const { return partials_; }

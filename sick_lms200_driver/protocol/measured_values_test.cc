@@ -8,12 +8,17 @@
 namespace sick_lms200 {
 namespace {
 
-Telegram measuredValuesTelegram(const std::vector<uint16_t>& raw, Units units, int partial = 0,
-                                uint8_t status = 0) {
+Telegram measuredValuesTelegram(const std::vector<uint16_t>& raw, Units units, uint8_t status = 0) {
   Telegram telegram;
   telegram.address = kSensorAddress;
   telegram.command = cmd::kMeasuredValues;
-  telegram.data = buildMeasuredValuesData(raw, units, partial, status);
+  telegram.data = buildMeasuredValuesData(raw, units, status);
+  return telegram;
+}
+
+Telegram partialScanTelegram(const std::vector<uint16_t>& raw, Units units, int offset_quarters) {
+  Telegram telegram = measuredValuesTelegram(raw, units);
+  telegram.data = buildPartialScanData(raw, units, offset_quarters, 0x10);
   return telegram;
 }
 
@@ -103,12 +108,36 @@ TEST(MeasuredValues, RejectsTruncatedOversizedAndInconsistentTelegrams) {
 TEST(MeasuredValues, ReadsStatusSeverity) {
   MeasuredValues values;
   std::string error;
-  ASSERT_TRUE(parseMeasuredValues(measuredValuesTelegram({1}, Units::kMillimetres, 0, 0x83),
-                                  &values, &error));
+  ASSERT_TRUE(
+      parseMeasuredValues(measuredValuesTelegram({1}, Units::kMillimetres, 0x83), &values, &error));
   EXPECT_EQ(values.status, 0x83);
   EXPECT_EQ(statusSeverity(values.status), StatusSeverity::kError);
   EXPECT_NE(describeStatus(values.status).find("contaminated"), std::string::npos);
   EXPECT_EQ(statusSeverity(0x00), StatusSeverity::kOk);
+}
+
+// Info word of a partial scan (mode 0x2A): bit 13 set, bits 11-12 the
+// offset in 0.25° steps (a 0.5° sweep's second partial says 2, not 1).
+TEST(MeasuredValues, ReadsThePartialScanFlagAndOffset) {
+  const Telegram telegram = partialScanTelegram({100, 200, 300}, Units::kMillimetres, 2);
+  const uint16_t info = telegram.data[0] | (telegram.data[1] << 8);
+  EXPECT_EQ(info, 3 | (2 << 11) | (1 << 13) | (1 << 14));
+  MeasuredValues values;
+  std::string error;
+  ASSERT_TRUE(parseMeasuredValues(telegram, &values, &error)) << error;
+  EXPECT_TRUE(values.partial_scan);
+  EXPECT_EQ(values.partial_offset_quarters, 2);
+  EXPECT_EQ(values.ranges.size(), 3u);
+  ASSERT_TRUE(
+      parseMeasuredValues(measuredValuesTelegram({1}, Units::kMillimetres), &values, &error));
+  EXPECT_FALSE(values.partial_scan);
+  EXPECT_EQ(values.partial_offset_quarters, 0);
+
+  EXPECT_EQ(partialOffsetQuarters(50, 1), 2);
+  EXPECT_EQ(partialForOffset(50, 2), 1);
+  EXPECT_EQ(partialForOffset(50, 1), -1);  // 0.25° is no multiple of 0.5°
+  EXPECT_EQ(partialForOffset(100, 2), -1);
+  EXPECT_EQ(partialForOffset(25, 3), 3);
 }
 
 TEST(InterlaceAssembler, AssemblesHalfDegreeScanFromTwoPartials) {
@@ -121,8 +150,9 @@ TEST(InterlaceAssembler, AssemblesHalfDegreeScanFromTwoPartials) {
     for (int j = 0; j < partialBeamCount(180, 50, k); ++j) raw.push_back(1000 + 2 * j + k);
     MeasuredValues partial;
     std::string error;
-    ASSERT_TRUE(
-        parseMeasuredValues(measuredValuesTelegram(raw, Units::kMillimetres, k), &partial, &error));
+    ASSERT_TRUE(parseMeasuredValues(
+        partialScanTelegram(raw, Units::kMillimetres, partialOffsetQuarters(50, k)), &partial,
+        &error));
     EXPECT_EQ(assembler.add(partial, &full), k == 1);
   }
   ASSERT_EQ(full.size(), 361u);
@@ -134,7 +164,8 @@ TEST(InterlaceAssembler, AssemblesQuarterDegreeAndRestartsOnMissingPartial) {
   ASSERT_EQ(assembler.partialsPerScan(), 4);
   auto partial = [](int k) {
     MeasuredValues values;
-    values.partial_index = k;
+    values.partial_scan = true;
+    values.partial_offset_quarters = k;  // 0.25° steps, here one per resolution step
     for (int j = 0; j < partialBeamCount(100, 25, k); ++j) values.ranges.push_back(j * 4 + k);
     return values;
   };
