@@ -2,71 +2,24 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
-#include <mutex>
-#include <thread>
 
-#include "serial_io/pseudo_terminal.h"
 #include "serial_io/serial_port.h"
 #include "sick_lms200_driver/emulator/lms200_emulator.h"
-#include "sick_lms200_driver/emulator/room.h"
 #include "sick_lms200_driver/protocol/scanner_link.h"
 #include "sick_lms200_driver/protocol/session.h"
+#include "sick_lms200_driver/test/emulator_on_pty.h"
 
 namespace sick_lms200 {
 namespace {
 
-double wallNow() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
-// Runs an emulator on a pty in a background thread.
-class EmulatorFixture {
- public:
-  explicit EmulatorFixture(EmulatorOptions options, const std::string& link)
-      : world_(makeDemoRoom()) {
-    EXPECT_TRUE(pty_.open(link)) << pty_.error();
-    emulator_ = std::make_unique<Lms200Emulator>(
-        pty_, world_, [](double) { return demoSensorPose(); }, options);
-    emulator_->setPeerBaudSource([this] { return pty_.peerBaud(); });
-    // Called inside spinOnce, which the thread below runs under mutex_.
-    emulator_->setScanObserver([this](const TrueScan& truth) { truths_.push_back(truth); });
-    thread_ = std::thread([this] {
-      while (running_) {
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          emulator_->spinOnce(wallNow());
-        }
-        std::this_thread::sleep_for(std::chrono::microseconds(300));
-      }
-    });
-  }
-  ~EmulatorFixture() {
-    running_ = false;
-    thread_.join();
-  }
-  template <typename F>
-  auto locked(F f) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return f(*emulator_, truths_);
-  }
-  std::string device() const { return pty_.devicePath(); }
-
- private:
-  ekf_slam::sim::PolygonWorld world_;
-  serial_io::PseudoTerminal pty_;
-  std::unique_ptr<Lms200Emulator> emulator_;
-  std::vector<TrueScan> truths_;
-  std::mutex mutex_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
-};
+using test::EmulatorOnPty;
+using test::wallNow;
 
 TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
-  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_a");
+  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_a");
   serial_io::SerialPort port;
   ASSERT_TRUE(port.open(emulator.device(), 9600)) << port.error();
   TelegramDecoder decoder(kSensorAddress);
@@ -112,7 +65,7 @@ TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
 TEST(Session, AcknowledgesEveryRequestWithin60MsAndAnswersSlowWritesLater) {
   EmulatorOptions options;
   options.config_write_delay = 0.5;
-  EmulatorFixture emulator(options, "/tmp/lms200_session_test_ack");
+  EmulatorOnPty emulator(options, "/tmp/lms200_session_test_ack");
   serial_io::SerialPort port;
   ASSERT_TRUE(port.open(emulator.device(), 9600)) << port.error();
   TelegramDecoder decoder(kSensorAddress);
@@ -168,7 +121,7 @@ TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
   emulator_options.initial_baud = 19200;  // left at another rate by a previous run
   emulator_options.nak_rate = 0.2;        // and a flaky line: retries needed
   emulator_options.seed = 3;
-  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_b");
+  EmulatorOnPty emulator(emulator_options, "/tmp/lms200_session_test_b");
   serial_io::SerialPort port;
   ASSERT_TRUE(port.open(emulator.device(), 9600));
   TelegramDecoder decoder(kSensorAddress);
@@ -196,7 +149,7 @@ TEST(Session, ProbesAStreamingSensorAndChangesVariantAndUnits) {
 TEST(Session, ChangesUnitsOnADeviceThatAnswersTheWriteAfterThreeSeconds) {
   EmulatorOptions emulator_options;
   emulator_options.config_write_delay = 3.0;
-  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_slow");
+  EmulatorOnPty emulator(emulator_options, "/tmp/lms200_session_test_slow");
   serial_io::SerialPort port;
   ASSERT_TRUE(port.open(emulator.device(), 9600));
   TelegramDecoder decoder(kSensorAddress);
@@ -214,7 +167,7 @@ TEST(Session, ChangesUnitsOnADeviceThatAnswersTheWriteAfterThreeSeconds) {
 }
 
 TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
-  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_c");
+  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_c");
   emulator.locked([](Lms200Emulator& e, auto&) {
     e.setSilent(true);
     return 0;
@@ -244,7 +197,7 @@ TEST(ScannerLink, StampsFirstBeamAndDropsCorruptedScans) {
   EmulatorOptions emulator_options;
   emulator_options.bad_crc_rate = 0.25;
   emulator_options.seed = 11;
-  EmulatorFixture emulator(emulator_options, "/tmp/lms200_session_test_d");
+  EmulatorOnPty emulator(emulator_options, "/tmp/lms200_session_test_d");
   LinkOptions options;
   options.port = emulator.device();
   std::vector<LaserScanData> scans;
@@ -295,7 +248,7 @@ namespace sick_lms200 {
 namespace {
 
 TEST(ScannerLink, ReinitialisesAfterTheSensorFallsSilent) {
-  EmulatorFixture emulator(EmulatorOptions{}, "/tmp/lms200_session_test_e");
+  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_e");
   LinkOptions options;
   options.port = emulator.device();
   options.data_timeout = 0.5;
