@@ -97,6 +97,7 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
     return;
   }
   const std::vector<uint8_t>& data = request.data;
+  const uint8_t status_byte = options_.status_byte;
   switch (request.command) {
     case cmd::kModeChange: {
       if (data.empty()) break;
@@ -121,18 +122,18 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       } else {
         result = 1;  // not emulated (e.g. partial scans)
       }
-      reply(request.command, {result, status_byte_}, start);
+      reply(request.command, {result, status_byte}, start);
       return;
     }
     case cmd::kStatus: {
       std::vector<uint8_t> status(options_.type_string.begin(), options_.type_string.end());
-      status.push_back(status_byte_);
+      status.push_back(status_byte);
       reply(request.command, status, start);
       return;
     }
     case cmd::kTypeString: {
       std::vector<uint8_t> type(options_.type_string.begin(), options_.type_string.end());
-      type.push_back(status_byte_);
+      type.push_back(status_byte);
       reply(request.command, type, start);
       return;
     }
@@ -150,13 +151,13 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
         next_sweep_start_ = -1.0;
       }
       reply(request.command,
-            {static_cast<uint8_t>(ok ? 1 : 0), data[0], data[1], data[2], data[3], status_byte_},
+            {static_cast<uint8_t>(ok ? 1 : 0), data[0], data[1], data[2], data[3], status_byte},
             start);
       return;
     }
     case cmd::kReadConfig: {
       std::vector<uint8_t> config = config_;
-      config.push_back(status_byte_);
+      config.push_back(status_byte);
       reply(request.command, config, start);
       return;
     }
@@ -169,7 +170,7 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       std::vector<uint8_t> answer(1 + config_.size() + 1);
       answer.front() = ok ? 1 : 0;
       std::copy(config_.begin(), config_.end(), answer.begin() + 1);
-      answer.back() = status_byte_;
+      answer.back() = status_byte;
       reply(request.command, answer, start, ok ? options_.config_write_delay : 0.0);
       return;
     }
@@ -233,8 +234,9 @@ void Lms200Emulator::sendScan(double first_beam_time) {
     raw[i] = rawFromRange(measured, units);
     truth.sent[i] = rangeFromRaw(raw[i], units);
   }
-  std::vector<uint8_t> telegram = encodeTelegram(kSensorAddress, cmd::kMeasuredValues,
-                                                 buildMeasuredValuesData(raw, units, status_byte_));
+  std::vector<uint8_t> telegram =
+      encodeTelegram(kSensorAddress, cmd::kMeasuredValues,
+                     buildMeasuredValuesData(raw, units, options_.status_byte));
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   if (options_.bad_crc_rate > 0.0 && uniform(rng_) < options_.bad_crc_rate) {
     telegram[telegram.size() - 2] ^= 0x5A;

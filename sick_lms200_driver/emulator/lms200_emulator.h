@@ -39,6 +39,10 @@ struct EmulatorOptions {
   double drop_byte_rate = 0.0;  // per streamed scan: one byte lost
   double nak_rate = 0.0;        // per request: answered with NAK only
   uint32_t seed = 1;
+  // Status byte ending every reply and scan. 0x10: no error, data source
+  // LMS type 6 (bits 3-4 = 10), as an LMS200 sends it; 00 in bits 3-4 is
+  // reserved. Another value emulates a sensor reporting it.
+  uint8_t status_byte = 0x10;
 };
 
 // Ground truth of one streamed scan.
@@ -113,7 +117,6 @@ class Lms200Emulator {
   int angle_deg_;
   int resolution_centideg_;
   std::vector<uint8_t> config_;
-  uint8_t status_byte_ = 0x00;
 
   std::deque<std::pair<double, uint8_t>> output_;  // (time the byte is complete, byte)
   double line_free_at_ = 0.0;

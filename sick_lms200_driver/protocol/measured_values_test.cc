@@ -116,6 +116,18 @@ TEST(MeasuredValues, ReadsStatusSeverity) {
   EXPECT_EQ(statusSeverity(0x00), StatusSeverity::kOk);
 }
 
+// Bits 3-4 of the status byte name the data source (10 = LMS type 6: 0x10 is
+// what an LMS200 sends in normal operation; 00 is reserved). The driver
+// reads only the severity (bits 0-2) and contamination (bit 7): both bytes
+// are "ok".
+TEST(MeasuredValues, ReadsBothTheDevicesStatusByteAndZeroAsOk) {
+  for (uint8_t status : {uint8_t{0x10}, uint8_t{0x00}}) {
+    EXPECT_EQ(statusSeverity(status), StatusSeverity::kOk) << int{status};
+    EXPECT_EQ(describeStatus(status).rfind("ok", 0), 0u) << describeStatus(status);
+  }
+  EXPECT_EQ(statusSeverity(0x13), StatusSeverity::kError);
+}
+
 // Info word of a partial scan (mode 0x2A): bit 13 set, bits 11-12 the
 // offset in 0.25° steps (a 0.5° sweep's second partial says 2, not 1).
 TEST(MeasuredValues, ReadsThePartialScanFlagAndOffset) {

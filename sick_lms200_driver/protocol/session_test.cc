@@ -58,6 +58,43 @@ TEST(Session, InitialisesFrom9600To38400AndStartsStreaming) {
   EXPECT_TRUE(session.stopStreaming()) << session.error();
 }
 
+// An LMS200 ends its replies and scans with status byte 0x10 (no error,
+// data source LMS type 6 in bits 3-4); 0x00 has those bits reserved. The
+// driver reads only the severity and contamination bits, so it initialises
+// and streams with either.
+TEST(Session, InitialisesAndStreamsWithStatusByte0x10Or0x00) {
+  for (const uint8_t status : {uint8_t{0x10}, uint8_t{0x00}}) {
+    EmulatorOptions emulator_options;
+    emulator_options.status_byte = status;
+    EmulatorOnPty emulator(emulator_options,
+                           "/tmp/lms200_session_test_status_" + std::to_string(status));
+    serial_io::SerialPort port;
+    ASSERT_TRUE(port.open(emulator.device(), 9600)) << port.error();
+    TelegramDecoder decoder(kSensorAddress);
+    Session session(
+        port, [&](int baud) { return port.setBaud(baud); }, decoder, SessionOptions{});
+    ASSERT_TRUE(session.initialize()) << session.error();
+    EXPECT_EQ(session.sensorStatus(), status);
+    MeasuredValues values;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    bool scanned = false;
+    while (!scanned && std::chrono::steady_clock::now() < deadline) {
+      uint8_t buffer[512];
+      const auto result = port.read(buffer, sizeof(buffer), std::chrono::milliseconds(100));
+      decoder.feed(buffer, result.bytes);
+      DecoderEvent event;
+      std::string error;
+      while (!scanned && decoder.next(&event)) {
+        scanned = event.kind == DecoderEvent::Kind::kTelegram &&
+                  parseMeasuredValues(event.telegram, &values, &error);
+      }
+    }
+    ASSERT_TRUE(scanned);
+    EXPECT_EQ(values.status, status);
+    EXPECT_EQ(statusSeverity(values.status), StatusSeverity::kOk);
+  }
+}
+
 // A client that times the device: every request, the slow configuration
 // write (0x77) included, is acknowledged within 60 ms of its last byte, as
 // a real LMS200 does; the write's reply follows once the EEPROM is written
