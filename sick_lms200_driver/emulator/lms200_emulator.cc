@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "sick_lms200_driver/emulator/status_reply.h"
 #include "sick_lms200_driver/protocol/scanner_link.h"
 #include "sick_lms200_driver/protocol/session.h"
 
@@ -107,16 +108,19 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
         const std::string password(data.begin() + 1, data.end());
         if (password == kInstallationPassword) {
           installation_mode_ = true;
+          operating_mode_ = mode_byte;
         } else {
           result = 1;  // wrong password
         }
       } else if (mode_byte == mode::kContinuousAll) {
         streaming_ = true;
         installation_mode_ = false;
+        operating_mode_ = mode_byte;
       } else if (mode_byte == mode::kRequestOnly) {
         streaming_ = false;
         next_sweep_start_ = -1.0;
         installation_mode_ = false;
+        operating_mode_ = mode_byte;
       } else if (baudForModeByte(mode_byte) != 0) {
         pending_baud_ = baudForModeByte(mode_byte);
       } else {
@@ -126,9 +130,14 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       return;
     }
     case cmd::kStatus: {
-      std::vector<uint8_t> status(options_.type_string.begin(), options_.type_string.end());
+      std::vector<uint8_t> status = statusReplyData();
       status.push_back(status_byte);
       reply(request.command, status, start);
+      return;
+    }
+    case cmd::kErrors: {
+      // Pending errors as (type, number) pairs: none.
+      reply(request.command, {status_byte}, start);
       return;
     }
     case cmd::kTypeString: {
@@ -178,6 +187,22 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       break;
   }
   enqueue({kNak}, start);  // unknown or malformed request
+}
+
+std::vector<uint8_t> Lms200Emulator::statusReplyData() const {
+  StatusReport report;
+  report.software_version = typeStringField(options_.type_string, 2);
+  report.boot_prom_version = typeStringField(options_.type_string, 3);
+  report.operating_mode = operating_mode_;
+  report.error_pending = statusSeverity(options_.status_byte) >= StatusSeverity::kError;
+  report.measuring_mode = config_[kConfigMeasuringModeIndex];
+  report.angle_deg = angle_deg_;
+  report.resolution_centideg = resolution_centideg_;
+  report.restart_mode = config_[kConfigRestartModeIndex];
+  report.restart_time = config_[kConfigRestartTimeIndex];
+  report.baud = baud_;
+  report.units = units();
+  return buildStatusData(report);
 }
 
 void Lms200Emulator::streamScans(double now) {

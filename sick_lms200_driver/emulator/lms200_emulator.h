@@ -82,6 +82,8 @@ class Lms200Emulator {
 
   int baud() const { return baud_; }
   bool streaming() const { return streaming_; }
+  // The mode byte of the last accepted mode change (0x25 at power-on).
+  uint8_t operatingMode() const { return operating_mode_; }
   int angleDeg() const { return angle_deg_; }
   int resolutionCentideg() const { return resolution_centideg_; }
   Units units() const;
@@ -94,6 +96,7 @@ class Lms200Emulator {
   void reply(uint8_t request_command, const std::vector<uint8_t>& data, double start,
              double work = 0.0);
   void enqueue(const std::vector<uint8_t>& bytes, double start);
+  std::vector<uint8_t> statusReplyData() const;
   void streamScans(double now);
   void sendScan(double first_beam_time);
   void flushOutput(double now);
@@ -112,6 +115,7 @@ class Lms200Emulator {
   int baud_;
   int pending_baud_ = 0;  // applied once the line is free
   bool streaming_ = false;
+  uint8_t operating_mode_ = mode::kRequestOnly;
   bool installation_mode_ = false;
   bool silent_ = false;
   int angle_deg_;

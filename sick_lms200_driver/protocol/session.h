@@ -20,6 +20,11 @@ namespace sick_lms200 {
 // Index, in the 0x74/0x77 configuration data (after the command byte), of
 // the byte selecting the units (0 = cm, 1 = mm).
 constexpr size_t kConfigUnitsIndex = 6;
+// ... of the measuring mode (0 = 8 m/80 m range with fields A, B and dazzle;
+// others trade range bits for flag bits), the restart mode and restart time.
+constexpr size_t kConfigMeasuringModeIndex = 5;
+constexpr size_t kConfigRestartModeIndex = 10;
+constexpr size_t kConfigRestartTimeIndex = 11;
 constexpr size_t kConfigSize = 34;
 constexpr char kInstallationPassword[] = "SICK_LMS";
 

@@ -25,6 +25,7 @@ namespace cmd {
 constexpr uint8_t kModeChange = 0x20;
 constexpr uint8_t kRequestValues = 0x30;
 constexpr uint8_t kStatus = 0x31;
+constexpr uint8_t kErrors = 0x32;  // pending errors (reply: type/number pairs)
 constexpr uint8_t kTypeString = 0x3A;
 constexpr uint8_t kVariant = 0x3B;
 constexpr uint8_t kReadConfig = 0x74;
