@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "sick_lms200_driver/emulator/status_reply.h"
@@ -48,9 +49,14 @@ double Lms200Emulator::nextDeadline(double now) const {
     deadline = std::min(line_free_at_, std::max(output_.front().first, now) + 0.002);
   }
   if (next_sweep_start_ >= 0.0) {
-    deadline = std::min(deadline, next_sweep_start_ + sweepTime(angle_deg_, resolution_centideg_));
+    deadline = std::min(deadline, next_sweep_start_ + currentSweepTime());
   }
   return deadline;
+}
+
+double Lms200Emulator::currentSweepTime() const {
+  if (streaming_ == Streaming::kPartialScans) return kMirrorPeriod * angle_deg_ / 360.0;
+  return sweepTime(angle_deg_, resolution_centideg_);
 }
 
 void Lms200Emulator::handleInput(double now) {
@@ -104,27 +110,32 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
       if (data.empty()) break;
       const uint8_t mode_byte = data[0];
       uint8_t result = 0;  // 0 = success
+      // Operating modes: what the sensor sends unasked from now on.
+      auto stream = [&](Streaming next) {
+        streaming_ = next;
+        next_sweep_start_ = -1.0;
+        next_partial_ = 0;
+        installation_mode_ = false;
+        operating_mode_ = mode_byte;
+      };
       if (mode_byte == mode::kInstallation) {
         const std::string password(data.begin() + 1, data.end());
         if (password == kInstallationPassword) {
+          stream(Streaming::kOff);
           installation_mode_ = true;
-          operating_mode_ = mode_byte;
         } else {
           result = 1;  // wrong password
         }
       } else if (mode_byte == mode::kContinuousAll) {
-        streaming_ = true;
-        installation_mode_ = false;
-        operating_mode_ = mode_byte;
+        stream(Streaming::kCompleteScans);
+      } else if (mode_byte == mode::kContinuousPartial) {
+        stream(Streaming::kPartialScans);
       } else if (mode_byte == mode::kRequestOnly) {
-        streaming_ = false;
-        next_sweep_start_ = -1.0;
-        installation_mode_ = false;
-        operating_mode_ = mode_byte;
+        stream(Streaming::kOff);
       } else if (baudForModeByte(mode_byte) != 0) {
         pending_baud_ = baudForModeByte(mode_byte);
       } else {
-        result = 1;  // not emulated (e.g. partial scans)
+        result = 1;  // not emulated (monitoring, mean values, subranges, ...)
       }
       reply(request.command, {result, status_byte}, start);
       return;
@@ -158,6 +169,7 @@ void Lms200Emulator::handleRequest(const Telegram& request, double now) {
         angle_deg_ = angle;
         resolution_centideg_ = res;
         next_sweep_start_ = -1.0;
+        next_partial_ = 0;
       }
       reply(request.command,
             {static_cast<uint8_t>(ok ? 1 : 0), data[0], data[1], data[2], data[3], status_byte},
@@ -206,25 +218,49 @@ std::vector<uint8_t> Lms200Emulator::statusReplyData() const {
 }
 
 void Lms200Emulator::streamScans(double now) {
-  if (!streaming_ || silent_) {
+  if (streaming_ == Streaming::kOff || silent_) {
     next_sweep_start_ = -1.0;
     return;
   }
-  const double sweep = sweepTime(angle_deg_, resolution_centideg_);
-  const double turns = 100.0 / resolution_centideg_;
+  const bool partial = streaming_ == Streaming::kPartialScans;
+  const int partials = 100 / resolution_centideg_;
+  const double sweep = currentSweepTime();
   if (next_sweep_start_ < 0.0) {
     // The newest sweep that ends once the line is free; sweeps start on
-    // mirror-turn boundaries.
+    // mirror-turn boundaries. A complete interlaced scan takes `partials`
+    // turns; partial k is measured in turns n with n mod partials = k, and
+    // the partials are sent in turn, so that every complete set arrives.
     const double earliest = std::max(now, line_free_at_ - sweep);
-    next_sweep_start_ = std::ceil(earliest / (kMirrorPeriod * turns)) * (kMirrorPeriod * turns);
+    if (partial) {
+      int64_t turn = static_cast<int64_t>(std::ceil(earliest / kMirrorPeriod));
+      while (turn % partials != next_partial_) ++turn;
+      next_sweep_start_ = static_cast<double>(turn) * kMirrorPeriod;
+    } else {
+      const double cycle = kMirrorPeriod * partials;
+      next_sweep_start_ = std::ceil(earliest / cycle) * cycle;
+    }
   }
   if (now < next_sweep_start_ + sweep) return;
   if (line_free_at_ > next_sweep_start_ + sweep + 1e-9) {
     next_sweep_start_ = -1.0;  // a reply took the line: measure a newer sweep
     return;
   }
-  sendScan(next_sweep_start_);
+  if (partial) {
+    sendPartialScan(next_partial_, next_sweep_start_);
+    next_partial_ = (next_partial_ + 1) % partials;
+  } else {
+    sendScan(next_sweep_start_);
+  }
   next_sweep_start_ = -1.0;
+}
+
+std::vector<double> Lms200Emulator::castPartial(int k, double turn_start) const {
+  ekf_slam::sim::SweepGeometry geometry;
+  geometry.angle_min = ekf_slam::degToRad(-angle_deg_ / 2.0 + k * resolution_centideg_ / 100.0);
+  geometry.angle_increment = ekf_slam::degToRad(1.0);
+  geometry.count = partialBeamCount(angle_deg_, resolution_centideg_, k);
+  geometry.max_range = maxRange(units());
+  return ekf_slam::sim::simulateRanges(world_, pose_source_(turn_start), geometry);
 }
 
 void Lms200Emulator::sendScan(double first_beam_time) {
@@ -232,36 +268,47 @@ void Lms200Emulator::sendScan(double first_beam_time) {
   truth.first_beam_time = first_beam_time;
   truth.angle_deg = angle_deg_;
   truth.resolution_centideg = resolution_centideg_;
-  truth.baud = baud_;
   const int partials = 100 / resolution_centideg_;
   const int count = angle_deg_ * 100 / resolution_centideg_ + 1;
   truth.ranges.assign(count, std::numeric_limits<double>::infinity());
-  const Units units = this->units();
-  const double max_range = maxRange(units);
   // Each mirror turn measures one interlaced partial: beams k·res + j·1°.
   for (int k = 0; k < partials; ++k) {
-    const double turn_start = first_beam_time + k * kMirrorPeriod;
-    ekf_slam::sim::SweepGeometry geometry;
-    geometry.angle_min = ekf_slam::degToRad(-angle_deg_ / 2.0 + k * resolution_centideg_ / 100.0);
-    geometry.angle_increment = ekf_slam::degToRad(1.0);
-    geometry.count = partialBeamCount(angle_deg_, resolution_centideg_, k);
-    geometry.max_range = max_range;
-    const std::vector<double> partial =
-        ekf_slam::sim::simulateRanges(world_, pose_source_(turn_start), geometry);
-    for (int j = 0; j < geometry.count; ++j) truth.ranges[j * partials + k] = partial[j];
+    const std::vector<double> partial = castPartial(k, first_beam_time + k * kMirrorPeriod);
+    for (size_t j = 0; j < partial.size(); ++j) truth.ranges[j * partials + k] = partial[j];
   }
+  transmit(std::move(truth), -1, first_beam_time + sweepTime(angle_deg_, resolution_centideg_));
+}
+
+void Lms200Emulator::sendPartialScan(int k, double first_beam_time) {
+  TrueScan truth;
+  truth.first_beam_time = first_beam_time;
+  truth.angle_deg = angle_deg_;
+  truth.resolution_centideg = resolution_centideg_;
+  truth.partial = true;
+  truth.partial_offset_centideg = k * resolution_centideg_;
+  truth.ranges = castPartial(k, first_beam_time);
+  transmit(std::move(truth), partialOffsetQuarters(resolution_centideg_, k),
+           first_beam_time + currentSweepTime());
+}
+
+void Lms200Emulator::transmit(TrueScan truth, int partial_offset_quarters, double send_at) {
+  truth.baud = baud_;
+  const Units units = this->units();
+  const size_t count = truth.ranges.size();
   std::normal_distribution<double> noise(0.0, options_.range_noise_sigma);
   std::vector<uint16_t> raw(count);
   truth.sent.resize(count);
-  for (int i = 0; i < count; ++i) {
+  for (size_t i = 0; i < count; ++i) {
     double measured = truth.ranges[i];
     if (std::isfinite(measured) && options_.range_noise_sigma > 0.0) measured += noise(rng_);
     raw[i] = rawFromRange(measured, units);
     truth.sent[i] = rangeFromRaw(raw[i], units);
   }
-  std::vector<uint8_t> telegram =
-      encodeTelegram(kSensorAddress, cmd::kMeasuredValues,
-                     buildMeasuredValuesData(raw, units, options_.status_byte));
+  const std::vector<uint8_t> data =
+      partial_offset_quarters < 0
+          ? buildMeasuredValuesData(raw, units, options_.status_byte)
+          : buildPartialScanData(raw, units, partial_offset_quarters, options_.status_byte);
+  std::vector<uint8_t> telegram = encodeTelegram(kSensorAddress, cmd::kMeasuredValues, data);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   if (options_.bad_crc_rate > 0.0 && uniform(rng_) < options_.bad_crc_rate) {
     telegram[telegram.size() - 2] ^= 0x5A;
@@ -273,7 +320,7 @@ void Lms200Emulator::sendScan(double first_beam_time) {
     truth.corrupted = true;
   }
   if (observer_) observer_(truth);
-  enqueue(telegram, first_beam_time + sweepTime(angle_deg_, resolution_centideg_));
+  enqueue(telegram, send_at);
 }
 
 void Lms200Emulator::flushOutput(double now) {

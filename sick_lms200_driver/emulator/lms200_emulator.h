@@ -2,12 +2,14 @@
 // host telegrams from a ByteStream (the master side of a pty in the
 // `lms200_emulator` executable, or anything in-process), answers them, and in
 // continuous mode streams 0xB0 scans of a PolygonWorld, paced at the rate the
-// emulated baud allows (10 bits per byte). No ROS.
+// emulated baud allows (10 bits per byte): complete scans in mode 0x24, one
+// partial scan per telegram in mode 0x2A. No ROS.
 //
 // Timing model (what the driver's stamp estimate assumes): a sweep starts at
-// a mirror-turn boundary t0 (75 Hz), lasts sweepTime(), and its telegram
-// starts leaving at t0 + sweepTime(), each byte taking 10 / baud seconds. The
-// emulator reports t0 as the true first-beam time of every scan.
+// a mirror-turn boundary t0 (75 Hz), lasts sweepTime() (one turn's sweep for
+// a partial scan), and its telegram starts leaving at t0 + that time, each
+// byte taking 10 / baud seconds. The emulator reports t0 as the true
+// first-beam time of every scan.
 #pragma once
 
 #include <cstdint>
@@ -50,6 +52,10 @@ struct TrueScan {
   double first_beam_time = 0.0;  // s, emulator clock
   int angle_deg = 180;
   int resolution_centideg = 100;
+  // A partial scan (mode 0x2A) holds the beams of one mirror turn, 1° apart,
+  // the first one partial_offset_centideg after a complete scan's first beam.
+  bool partial = false;
+  int partial_offset_centideg = 0;
   std::vector<double> ranges;  // m, noise-free, +inf for no return, angular order
   std::vector<double> sent;    // m, as encoded (noise, units, reserved codes)
   int baud = 0;                // line speed it is sent at
@@ -81,7 +87,8 @@ class Lms200Emulator {
   double nextDeadline(double now) const;
 
   int baud() const { return baud_; }
-  bool streaming() const { return streaming_; }
+  bool streaming() const { return streaming_ != Streaming::kOff; }
+  bool streamingPartialScans() const { return streaming_ == Streaming::kPartialScans; }
   // The mode byte of the last accepted mode change (0x25 at power-on).
   uint8_t operatingMode() const { return operating_mode_; }
   int angleDeg() const { return angle_deg_; }
@@ -98,7 +105,14 @@ class Lms200Emulator {
   void enqueue(const std::vector<uint8_t>& bytes, double start);
   std::vector<uint8_t> statusReplyData() const;
   void streamScans(double now);
+  // Time (s) from the first to the last beam of what the current mode sends.
+  double currentSweepTime() const;
+  // Noise-free ranges (m) of partial k, measured in the mirror turn starting at `turn_start`.
+  std::vector<double> castPartial(int k, double turn_start) const;
   void sendScan(double first_beam_time);
+  void sendPartialScan(int k, double first_beam_time);
+  // Adds noise, encodes `truth` and queues its telegram at `send_at`.
+  void transmit(TrueScan truth, int partial_offset_quarters, double send_at);
   void flushOutput(double now);
   bool peerMatches() const;
   double byteTime() const { return 10.0 / baud_; }
@@ -114,7 +128,10 @@ class Lms200Emulator {
   TelegramDecoder decoder_{kHostAddress};
   int baud_;
   int pending_baud_ = 0;  // applied once the line is free
-  bool streaming_ = false;
+  // What the sensor sends unasked: nothing (request mode 0x25), complete
+  // scans (0x24) or partial scans (0x2A).
+  enum class Streaming { kOff, kCompleteScans, kPartialScans };
+  Streaming streaming_ = Streaming::kOff;
   uint8_t operating_mode_ = mode::kRequestOnly;
   bool installation_mode_ = false;
   bool silent_ = false;
@@ -125,6 +142,7 @@ class Lms200Emulator {
   std::deque<std::pair<double, uint8_t>> output_;  // (time the byte is complete, byte)
   double line_free_at_ = 0.0;
   double next_sweep_start_ = -1.0;  // < 0: none scheduled
+  int next_partial_ = 0;            // partial k measured next in mode 0x2A
   uint64_t garbage_heard_ = 0;
 };
 

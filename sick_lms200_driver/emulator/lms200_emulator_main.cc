@@ -155,10 +155,14 @@ sensor_msgs::LaserScan toMessage(const sick_lms200::TrueScan& truth) {
   sensor_msgs::LaserScan msg;
   msg.header.stamp = ros::Time(truth.first_beam_time);
   msg.header.frame_id = "laser";
-  const double increment = ekf_slam::degToRad(truth.resolution_centideg / 100.0);
-  msg.angle_min = static_cast<float>(-ekf_slam::degToRad(truth.angle_deg / 2.0));
-  msg.angle_max = static_cast<float>(ekf_slam::degToRad(truth.angle_deg / 2.0));
-  msg.angle_increment = static_cast<float>(increment);
+  // A partial scan's beams are 1° apart from its offset on; a complete
+  // scan's at the resolution across the whole angle.
+  const double first = -truth.angle_deg / 2.0 + truth.partial_offset_centideg / 100.0;
+  const double increment = truth.partial ? 1.0 : truth.resolution_centideg / 100.0;
+  const double count = static_cast<double>(truth.ranges.size());
+  msg.angle_min = static_cast<float>(ekf_slam::degToRad(first));
+  msg.angle_max = static_cast<float>(ekf_slam::degToRad(first + (count - 1) * increment));
+  msg.angle_increment = static_cast<float>(ekf_slam::degToRad(increment));
   msg.range_max = 81.82f;
   msg.ranges.assign(truth.ranges.begin(), truth.ranges.end());
   return msg;
