@@ -58,14 +58,13 @@ InputQueue::InputQueue(ros::NodeHandle node, const SlamNodeParams& params,
 bool InputQueue::accepting() {
   ++received_;
   // A bag restarted (or looped) under use_sim_time: the clock runs backwards.
-  // The tf buffer would refuse the old-new data; the map is kept (its stamps
-  // now lie in the future), so scans are dropped as not increasing until
-  // ~reset, which the log says.
+  // The tf buffer would refuse the old-new data: it is emptied (the static
+  // transforms stay), and the node restarts its map (clock_jump).
   const ros::Time now = ros::Time::now();
   if (now + ros::Duration(1.0) < last_clock_) {
     ROS_WARN(
-        "ekf_slam_node: the clock jumped back by %.3f s (bag restarted?): tf buffer "
-        "cleared; call ~reset to start a new map from the new data",
+        "ekf_slam_node: the clock jumped back by %.3f s (a bag restarted or looped?): tf "
+        "buffer cleared",
         (last_clock_ - now).toSec());
     transforms_.clear();
     clear();

@@ -57,7 +57,7 @@ class InputQueue {
   struct Hooks {
     std::function<bool()> paused;  // true: every input is dropped (kPaused)
     // The clock jumped back (a bag restarted); the tf buffer and the queue
-    // have been emptied.
+    // have been emptied. The input that showed it is processed after.
     std::function<void()> clock_jumped;
     // An input whose transforms exist, in arrival order.
     std::function<void(const PendingInput&, const Pose2& odometry, const Pose2& laser)> released;

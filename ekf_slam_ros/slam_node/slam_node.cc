@@ -55,7 +55,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
       input_(node, params_, transforms_, drops_,
              {[this] { return services_.paused(); },
               // map → odom goes out again with the new data's stamps.
-              [this] { map_to_odom_.restartStamps(); },
+              [this] { onClockJump(); },
               [this](const PendingInput& pending, const Pose2& odometry, const Pose2& laser) {
                 onReleased(pending, odometry, laser);
               }}),
@@ -164,6 +164,25 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   map_to_odom_.update(compose(result.causal_pose, inverse(odometry)), stamp);
   if (result.outcome == ScanOutcome::kIterated) diagnostics_.addIteration(result);
   outputs_.publishScan(result, odometry, *pipeline_, pending.header);
+}
+
+void SlamNode::onClockJump() {
+  map_to_odom_.restartStamps();
+  if (params_.clock_jump == "continue") {
+    const std::optional<LandmarkMapFile> prior = landmarks();
+    const std::string error =
+        restart(config_.pipeline.initial_pose, config_.pipeline.initial_pose_covariance, prior,
+                localize_only_);
+    if (error.empty()) {
+      ROS_WARN(
+          "ekf_slam_node: clock_jump: continue: the filter restarts at the initial pose with "
+          "the %zu landmarks mapped so far as its prior",
+          prior ? prior->landmarks.size() : size_t{0});
+      return;
+    }
+    ROS_WARN("ekf_slam_node: clock_jump: continue: %s; a new map instead", error.c_str());
+  }
+  services_.startNewMap("the clock jumped back (clock_jump: new_map)");
 }
 
 void SlamNode::acceptNextMotion() {

@@ -86,6 +86,9 @@ class SlamNode : public SlamControl {
   // The pose (map frame) and covariance the next pipeline starts at; empty
   // when the pose and covariance are unusable, else the problem.
   std::string setStartPose(const Pose2& pose, const Matrix3& covariance);
+  // The clock jumped back: a new map, or the map kept as the prior of a
+  // restarted filter (params.clock_jump).
+  void onClockJump();
   // No pipeline; every part forgets what it kept of the last one.
   void resetState();
 

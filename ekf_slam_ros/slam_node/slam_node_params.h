@@ -44,7 +44,12 @@ struct SlamNodeParams {
   // Inputs the subscription holds while the node is busy; ROS drops the
   // oldest beyond it before the node sees them, so it is ample.
   int subscriber_queue_size = 1000;
-  double tf_cache_time = 10.0;         // s of transforms buffered (tf2's default)
+  double tf_cache_time = 10.0;  // s of transforms buffered (tf2's default)
+  // When the clock jumps back (a bag replayed again, or looped with -l):
+  // "new_map" starts a new map from the new data, as ~reset does;
+  // "continue" keeps the map as the prior of a filter restarted at the
+  // initial pose, where a replayed log starts again.
+  std::string clock_jump = "new_map";
   double transform_tolerance = 0.1;    // s map→odom is future-dated by
   double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
   int min_valid_readings = 10;         // fewer usable ranges: the scan is rejected
@@ -82,6 +87,7 @@ struct SlamNodeParams {
   void visitFields(Visitor& v) {
     v.text("config_file", config_file, {});
     v.text("map_frame", map_frame, {});
+    v.text("clock_jump", clock_jump, {"new_map", "continue"});
     v.text("odom_frame", odom_frame, {});
     v.text("base_frame", base_frame, {});
     v.text("scan_topic", scan_topic, {});

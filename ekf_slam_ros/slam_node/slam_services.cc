@@ -230,15 +230,19 @@ bool SlamServices::onStep(std_srvs::Trigger::Request&, std_srvs::Trigger::Respon
 }
 
 bool SlamServices::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  startNewMap("reset");
+  response.success = true;
+  response.message = "reset: empty map; the next scan starts a new one";
+  return true;
+}
+
+void SlamServices::startNewMap(const std::string& why) {
   slam_.clearMap();
   grids_.forget();
   const std_msgs::Header header = mapHeader();
   outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
   outputs_.republishPath(header.stamp);
-  response.success = true;
-  response.message = "reset: empty map; the next scan starts a new one";
-  ROS_INFO("ekf_slam_node: %s", response.message.c_str());
-  return true;
+  ROS_INFO("ekf_slam_node: %s: empty map; the next scan starts a new one", why.c_str());
 }
 
 bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {

@@ -58,6 +58,9 @@ class SlamServices {
   void afterScan(const ros::Time& stamp, ScanOutcome outcome);
   // A new map: no step is pending.
   void cancelStep() { step_pending_ = false; }
+  // What ~reset does, for `why` (logged): an empty map, published so; the
+  // next scan starts a new one.
+  void startNewMap(const std::string& why);
 
  private:
   bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);

@@ -1,0 +1,129 @@
+#!/usr/bin/python3
+"""A bag played twice: the clock jumps back (test/clock_jump.test).
+
+Plays the first --seconds of the bag, then plays it again, as rosbag play
+-l loops it. Checks:
+- the second pass is mapped: poses for nearly all its scans;
+- /diagnostics keeps coming through both passes and after them (it runs on
+  wall time);
+- --mode new_map: the map at the end is a new map of the same log, not
+  the first pass's with the second added; --mode continue: the first
+  pass's landmarks are kept (the second pass adds at most a few).
+"""
+import argparse
+import os
+import subprocess
+import sys
+import threading
+import time
+import unittest
+
+import rosbag
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from ekf_slam.msg import LandmarkMap
+from geometry_msgs.msg import PoseWithCovarianceStamped
+
+
+class ClockJump(unittest.TestCase):
+    args = None
+
+    def setUp(self):
+        if not os.path.exists(self.args.bag):
+            self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
+        self.lock = threading.Lock()
+        self.pass_poses = [0, 0]  # poses received during each pass
+        self.current = 0
+        self.landmarks = 0
+        self.diagnostics_wall = []
+        self.drops = {}
+        self.stamps = [[], []]
+        rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
+        rospy.Subscriber("landmark_map", LandmarkMap, self.on_map, queue_size=10)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
+
+    def on_pose(self, msg):
+        with self.lock:
+            self.pass_poses[self.current] += 1
+            self.stamps[self.current].append(msg.header.stamp.to_sec())
+
+    def on_map(self, msg):
+        with self.lock:
+            self.landmarks = len(msg.landmarks)
+
+    def on_diagnostics(self, msg):
+        with self.lock:
+            self.diagnostics_wall.append(time.time())
+            for status in msg.status:
+                for kv in status.values:
+                    if kv.key.startswith("dropped") and kv.value not in ("0", "False"):
+                        self.drops[kv.key] = kv.value
+
+    def play(self):
+        subprocess.check_call(["rosbag", "play", "--clock", "--quiet", "-r", str(self.args.rate),
+                               "-u", str(self.args.seconds), self.args.bag])
+        last = -1
+        while sum(self.pass_poses) != last:  # the node finishes its queue
+            last = sum(self.pass_poses)
+            time.sleep(1.5)
+
+    def test_the_second_pass_is_mapped(self):
+        deadline = time.time() + 30.0
+        while rospy.get_param("/use_sim_time", False) is not True and time.time() < deadline:
+            time.sleep(0.1)
+        rospy.wait_for_service("ekf_slam/reset", timeout=60.0)
+        time.sleep(1.0)
+        with rosbag.Bag(self.args.bag) as bag:
+            end = bag.get_start_time() + self.args.seconds
+            scans = sum(1 for _, _, t in bag.read_messages(topics=["/scan"]) if t.to_sec() <= end)
+        start = time.time()
+        self.play()
+        first_landmarks = self.landmarks
+        with self.lock:
+            self.current = 1
+        second_start = time.time()
+        self.play()
+        end_of_play = time.time()
+        time.sleep(3.5)
+        print("scans per pass %d; poses %s; landmarks after the first pass %d, at the end %d; "
+              "dropped: %s" % (scans, self.pass_poses, first_landmarks, self.landmarks,
+                               self.drops or "none"))
+        missing = sorted(set(self.stamps[0]) - set(self.stamps[1]))
+        print("scans of the first pass without a pose in the second: %d, %s ... %s" %
+              (len(missing), missing[:5], missing[-5:]))
+        self.assertGreater(self.pass_poses[0], 0.95 * scans)
+        # The first scans after the jump lose their odometry with the tf
+        # buffer, and the last few of the second pass may still wait for
+        # theirs when the log ends.
+        self.assertGreater(self.pass_poses[1], 0.9 * scans, "the second pass was not mapped")
+
+        with self.lock:
+            walls = list(self.diagnostics_wall)
+        for a, b in ((start, second_start), (second_start, end_of_play),
+                     (end_of_play, end_of_play + 3.5)):
+            self.assertGreaterEqual(sum(1 for t in walls if a <= t <= b), 2,
+                                    "no /diagnostics for %.1f s" % (b - a))
+
+        self.assertGreater(first_landmarks, 10)
+        if self.args.mode == "new_map":
+            # A new map of (nearly) the same scans: neither the first map
+            # with the second pass added, nor empty.
+            self.assertLess(self.landmarks, 1.2 * first_landmarks, "the first map was kept")
+            self.assertGreater(self.landmarks, 0.5 * first_landmarks, "no new map")
+        else:
+            self.assertGreaterEqual(self.landmarks, first_landmarks, "the first pass's map lost")
+            self.assertLess(self.landmarks, 1.2 * first_landmarks,
+                            "the second pass mapped the log again beside the first")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--bag", required=True)
+    parser.add_argument("--seconds", type=float, default=100.0)
+    parser.add_argument("--rate", type=float, default=10.0)
+    parser.add_argument("--mode", default="new_map")
+    args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
+    ClockJump.args = args
+    rospy.init_node("clock_jump_test")
+    rostest.rosrun("ekf_slam", "clock_jump", ClockJump)
