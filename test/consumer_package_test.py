@@ -3,10 +3,11 @@
 
 In a clean environment that sources only ekf_slam's development space, a
 fresh catkin workspace holding test/consumer is built with catkin_make, and
-its program runs the core's SlamPipeline on synthetic scans. Everything the
-program needs (the core's headers, its static libraries in link order,
-Eigen) must come from `find_package(catkin REQUIRED COMPONENTS
-ekf_slam)`; a failed build or run fails the test.
+its program runs the core's SlamPipeline on synthetic scans and reads its
+landmark map file back. Everything the program needs (the core's headers,
+its static libraries in link order, Eigen, yaml-cpp) must come from
+`find_package(catkin REQUIRED COMPONENTS ekf_slam)`; a failed build or run
+fails the test.
 test/install_space_test.py does the same against the install space.
 """
 import os

@@ -1,6 +1,7 @@
 // The landmark map as a file: what the live node's save_map / load_map
-// services and the offline runner's landmarks.yaml hold. Plain text in a
-// small YAML subset so that people and yaml tools can read it:
+// services and the offline runner's landmarks.yaml hold. YAML, so that
+// people and yaml tools can read and edit it. The writer puts one entry on
+// a line:
 //
 //   # comment lines
 //   version: 2
@@ -14,18 +15,21 @@
 //   line_angles:
 //     - {id: 8, theta: -1.57, variance: 1e-4, observations: 9, endpoints: [3, -1]}
 //
-// (one entry per line in the file). `landmarks` are the points (x, y);
-// `lines` the (p, θ) line landmarks, x cos θ + y sin θ = p; `line_angles`
-// the θ-only ones (the normal's direction θ; the offset comes from the
-// point landmarks named in `endpoints`, -1 for none). Ids are unique across
-// all three lists, and every endpoint id names a point of `landmarks`.
+// and the reader (yaml-cpp) takes any YAML of the same content: block or
+// flow style, keys in any order or quoted, comments anywhere, numbers
+// quoted or not (what PyYAML's load and dump of the file gives loads).
+// `landmarks` are the points (x, y); `lines` the (p, θ) line landmarks,
+// x cos θ + y sin θ = p; `line_angles` the θ-only ones (the normal's
+// direction θ; the offset comes from the point landmarks named in
+// `endpoints`, -1 for none). Ids are unique across all three lists, and
+// every endpoint id names a point of `landmarks`.
 //
 // `version` is the format's (2; a newer one is refused) and `count` the
 // number of landmarks of all kinds that follow: a file cut short (a full
 // disk, a copy interrupted) is refused instead of loading the first part.
-// Version 2 needs all three lists (an empty one as `lines: []`); version 1
-// files hold points only; files without `version` (written before it
-// existed) are read as version 1 without `count`.
+// Version 2 needs all three lists (an empty one as `lines: []`, or `lines:`
+// alone); version 1 files hold points only; files without `version`
+// (written before it existed) are read as version 1 without `count`.
 //
 // Units, all in the map frame: m for x, y, p and the extent; rad for θ,
 // normalised (p >= 0, θ in [-π, π]); covariances are the full 2×2 marginal
@@ -34,8 +38,8 @@
 // the stretch of the line that was seen, along d = (−sin θ, cos θ) from the
 // foot point p·(cos θ, sin θ) (optional: absent when unknown). The reader
 // also accepts the three-value form [xx, xy, yy] of older offline runs, and
-// a missing `observations` (then 2: not tentative). No ROS, no yaml-cpp:
-// the core stays dependency-free.
+// a missing `observations` (then 2: not tentative). No ROS; yaml-cpp stays
+// inside the .cc files.
 #pragma once
 
 #include <string>
@@ -84,7 +88,9 @@ struct LandmarkMapFile {
 
 constexpr int kLandmarkMapVersion = 2;
 
-// Writes with full double precision (a round trip gives the same numbers).
+// Writes with full double precision (a round trip gives the same numbers);
+// a frame that YAML would read differently written plain (one with a '#',
+// a ': ', a line break, or "null") is double-quoted.
 // Atomic: the text goes to a temporary file in the same directory, is
 // flushed to the disk (fsync) and renamed over `path`, so an earlier file
 // at `path` survives any failure (a full disk, a crash) unchanged.
@@ -94,13 +100,16 @@ std::string writeLandmarkMap(const std::string& path, const LandmarkMapFile& map
 // Text form of the same (for writeLandmarkMap and tests).
 std::string formatLandmarkMap(const LandmarkMapFile& map);
 
-// Parses a whole file; on error returns "<path>:<line>: <problem>" and
-// leaves `map` untouched. Duplicate ids (across all kinds), non-finite
-// values, covariances that are not symmetric positive definite, values
-// beyond the limits below (no building is 1,000 km across), p < 0, θ
-// outside [-π, π], an extent with s_min > s_max, endpoint ids that name no
-// point of the file (or the same point twice) and a landmark count that
-// disagrees with `count` are errors.
+// Parses a whole file; on error returns "<path>:<line>: <problem>" (the
+// 1-based line where the value at fault starts; "<path>: <problem>" for
+// what concerns the whole file, such as a count that disagrees) and leaves
+// `map` untouched. Text that is not YAML (yaml-cpp's message and line),
+// more than one YAML document, a key given twice, unknown keys, duplicate
+// ids (across all kinds), non-finite values, covariances that are not
+// symmetric positive definite, values beyond the limits below (no building
+// is 1,000 km across), p < 0, θ outside [-π, π], an extent with
+// s_min > s_max, endpoint ids that name no point of the file (or the same
+// point twice) and a landmark count that disagrees with `count` are errors.
 constexpr double kMaxLandmarkCoordinate = 1e6;  // m, |x|, |y|, p and |s|
 constexpr double kMaxLandmarkVariance = 1e6;    // m², each diagonal entry (σ = 1 km)
 // rad², of θ: σ = π, a direction not known at all.

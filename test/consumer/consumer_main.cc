@@ -1,6 +1,8 @@
 // Runs ekf_slam's pipeline on three synthetic scans of a box room, through
-// nothing but the package's export. Exit status 0 when the first scan
-// initialised the map (kIterated) and every pose is finite.
+// nothing but the package's export, and reads its landmark map file back
+// (yaml-cpp, which the export brings along). Exit status 0 when the first
+// scan initialised the map (kIterated), every pose is finite and the map
+// file loads with every landmark.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -9,6 +11,8 @@
 
 #include "ekf_slam_core/geometry/angle.h"
 #include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/io/landmark_map.h"
+#include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 #include "ekf_slam_core/sensors/scan.h"
 
@@ -122,6 +126,14 @@ int main() {
     }
     odometry = ekf_slam::compose(odometry, ekf_slam::Pose2(0.1, 0.0, ekf_slam::degToRad(2.0)));
   }
+  const ekf_slam::LandmarkMapFile map =
+      ekf_slam::toLandmarkMapFile(pipeline.filter(), pipeline.lineSupport(), "map");
+  ekf_slam::LandmarkMapFile loaded;
+  const std::string error =
+      ekf_slam::parseLandmarkMap(ekf_slam::formatLandmarkMap(map), "landmarks.yaml", &loaded);
+  std::printf("  landmark map file: %zu landmarks written, %zu read%s%s\n", map.size(),
+              loaded.size(), error.empty() ? "" : ": ", error.c_str());
+  if (!error.empty() || loaded.size() != map.size() || map.size() == 0) ok = false;
   std::printf("ekf_slam_consumer: %s\n", ok ? "ok" : "FAILED");
   return ok ? 0 : 1;
 }
