@@ -4,18 +4,19 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
+#include <set>
 
 #include "ekf_slam_core/io/atomic_file.h"
-#include "ekf_slam_core/io/text_fields.h"
+#include "ekf_slam_core/io/yaml_fields.h"
 
 namespace ekf_slam {
 namespace {
 
-using io_text::trim;
+using io_yaml::describe;
+using io_yaml::lineOf;
 
-bool parseDouble(const std::string& text, double* value) {
-  return io_text::parseNumber(text, value) && std::isfinite(*value);
+bool finiteNumber(const YAML::Node& node, double* value) {
+  return io_yaml::scalarNumber(node, value) && std::isfinite(*value);
 }
 
 std::string directoryOf(const std::string& path) {
@@ -99,81 +100,113 @@ std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) 
   std::string error = writeFileAtomically(image_path, image);
   if (!error.empty()) return error;
   const size_t slash = image_path.find_last_of('/');
-  char text[512];
-  std::snprintf(text, sizeof(text),
-                "image: %s\nresolution: %.17g\norigin: [%.17g, %.17g, %.17g]\nnegate: 0\n"
+  const std::string image_name =
+      slash == std::string::npos ? image_path : image_path.substr(slash + 1);
+  char numbers[256];
+  std::snprintf(numbers, sizeof(numbers),
+                "resolution: %.17g\norigin: [%.17g, %.17g, %.17g]\nnegate: 0\n"
                 "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
-                (slash == std::string::npos ? image_path : image_path.substr(slash + 1)).c_str(),
                 grid.resolution, grid.origin_x, grid.origin_y, grid.origin_yaw);
-  return writeFileAtomically(yaml_path, text);
+  return writeFileAtomically(yaml_path,
+                             "image: " + io_yaml::scalarText(image_name) + "\n" + numbers);
 }
+
+namespace {
+
+// What readGridMap takes from the YAML file, map_server's defaults where a
+// key may be left out.
+struct MapServerKeys {
+  std::string image;
+  double resolution = 0.0;  // 0: not given
+  bool have_origin = false;
+  double origin[3] = {0.0, 0.0, 0.0};
+  double negate = 0.0, occupied = 0.65, free_below = 0.196;
+};
+
+// The keys of the YAML file's tree; an empty string or the problem, with
+// in `line` the 1-based line where the value at fault starts (0: the file
+// as a whole).
+std::string readKeys(const YAML::Node& root, MapServerKeys* keys, int* line) {
+  auto fail = [line](const YAML::Node& node, const std::string& problem) {
+    *line = lineOf(node);
+    return problem;
+  };
+  if (!root.IsNull() && !root.IsMap()) {
+    return fail(
+        root, "expected map_server's keys (image, resolution, origin, ...), got " + describe(root));
+  }
+  std::set<std::string> seen;
+  for (const auto& pair : root) {
+    const YAML::Node &key_node = pair.first, &value = pair.second;
+    if (!key_node.IsScalar()) continue;  // not one of map_server's keys
+    const std::string& key = key_node.Scalar();
+    if (!seen.insert(key).second) return fail(key_node, "key '" + key + "' given twice");
+    if (key == "image") {
+      if (!value.IsNull() && !value.IsScalar()) {
+        return fail(value, "image must be a file name, got " + describe(value));
+      }
+      keys->image = value.Scalar();
+    } else if (key == "resolution") {
+      if (!finiteNumber(value, &keys->resolution) || !(keys->resolution > 0.0)) {
+        return fail(value,
+                    "resolution must be a positive number (m per cell), got " + describe(value));
+      }
+    } else if (key == "origin") {
+      if (!value.IsSequence() || value.size() != 3 || !finiteNumber(value[0], &keys->origin[0]) ||
+          !finiteNumber(value[1], &keys->origin[1]) || !finiteNumber(value[2], &keys->origin[2])) {
+        return fail(value,
+                    "origin must be [x, y, yaw], three finite numbers, got " + describe(value));
+      }
+      keys->have_origin = true;
+    } else if (key == "negate") {
+      if (!finiteNumber(value, &keys->negate) || (keys->negate != 0.0 && keys->negate != 1.0)) {
+        return fail(value, "negate must be 0 or 1, got " + describe(value));
+      }
+    } else if (key == "occupied_thresh") {
+      if (!finiteNumber(value, &keys->occupied)) {
+        return fail(value, "occupied_thresh must be a number, got " + describe(value));
+      }
+    } else if (key == "free_thresh") {
+      if (!finiteNumber(value, &keys->free_below)) {
+        return fail(value, "free_thresh must be a number, got " + describe(value));
+      }
+    } else if (key == "mode") {
+      if (!value.IsScalar() || value.Scalar() != "trinary") {
+        return fail(value, "mode " + describe(value) + ": only trinary maps are read (-1, 0, 100)");
+      }
+    }  // other keys (for example map_server's own additions) are not needed
+  }
+  if (keys->image.empty()) return "no 'image'";
+  if (!(keys->resolution > 0.0)) return "no 'resolution'";
+  if (!keys->have_origin) return "no 'origin'";
+  if (!(keys->free_below >= 0.0 && keys->free_below < keys->occupied && keys->occupied <= 1.0)) {
+    return "thresholds must satisfy 0 <= free_thresh < occupied_thresh <= 1";
+  }
+  return "";
+}
+
+}  // namespace
 
 std::string readGridMap(const std::string& yaml_path, GridMapFile* grid) {
   std::string text;
   if (!readWholeFile(yaml_path, &text)) return yaml_path + ": cannot open";
-  std::string image;
-  double resolution = 0.0, occupied = 0.65, free_below = 0.196, negate = 0.0;
-  double origin[3] = {0.0, 0.0, 0.0};
-  bool have_resolution = false, have_origin = false;
-  std::istringstream in(text);
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::string where = yaml_path + ":" + std::to_string(number) + ": ";
-    const size_t hash = line.find('#');
-    if (hash != std::string::npos) line = line.substr(0, hash);
-    if (trim(line).empty()) continue;
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) return where + "expected 'key: value'";
-    const std::string key = trim(line.substr(0, colon)), value = trim(line.substr(colon + 1));
-    if (key == "image") {
-      image = value;
-      if (image.size() >= 2 && (image.front() == '"' || image.front() == '\'') &&
-          image.back() == image.front()) {
-        image = image.substr(1, image.size() - 2);
-      }
-    } else if (key == "resolution") {
-      if (!parseDouble(value, &resolution) || !(resolution > 0.0)) {
-        return where + "resolution must be a positive number (m per cell)";
-      }
-      have_resolution = true;
-    } else if (key == "origin") {
-      if (value.size() < 2 || value.front() != '[' || value.back() != ']') {
-        return where + "origin must be [x, y, yaw]";
-      }
-      std::istringstream parts(value.substr(1, value.size() - 2));
-      std::string part;
-      int n = 0;
-      while (std::getline(parts, part, ',')) {
-        if (n >= 3 || !parseDouble(part, &origin[n])) {
-          return where + "origin must be [x, y, yaw], three finite numbers";
-        }
-        ++n;
-      }
-      if (n != 3) return where + "origin must be [x, y, yaw], three finite numbers";
-      have_origin = true;
-    } else if (key == "negate") {
-      if (!parseDouble(value, &negate) || (negate != 0.0 && negate != 1.0)) {
-        return where + "negate must be 0 or 1";
-      }
-    } else if (key == "occupied_thresh") {
-      if (!parseDouble(value, &occupied)) return where + "occupied_thresh must be a number";
-    } else if (key == "free_thresh") {
-      if (!parseDouble(value, &free_below)) return where + "free_thresh must be a number";
-    } else if (key == "mode") {
-      if (value != "trinary") {
-        return where + "mode '" + value + "': only trinary maps are read (-1, 0, 100)";
-      }
-    }  // other keys (for example map_server's own additions) are not needed
+  YAML::Node root;
+  int line = 0;
+  std::string problem = io_yaml::loadDocument(text, &root, &line);
+  MapServerKeys keys;
+  if (problem.empty()) {
+    try {
+      problem = readKeys(root, &keys, &line);
+    } catch (const YAML::Exception& e) {  // not expected: readKeys asks only what nodes hold
+      line = e.mark.is_null() ? 0 : e.mark.line + 1;
+      problem = e.msg;
+    }
   }
-  if (image.empty()) return yaml_path + ": no 'image'";
-  if (!have_resolution) return yaml_path + ": no 'resolution'";
-  if (!have_origin) return yaml_path + ": no 'origin'";
-  if (!(free_below >= 0.0 && free_below < occupied && occupied <= 1.0)) {
-    return yaml_path + ": thresholds must satisfy 0 <= free_thresh < occupied_thresh <= 1";
+  if (!problem.empty()) {
+    return yaml_path + (line > 0 ? ":" + std::to_string(line) : "") + ": " + problem;
   }
 
+  const std::string& image = keys.image;
   const std::string image_path = image.front() == '/' ? image : directoryOf(yaml_path) + image;
   std::string bytes;
   if (!readWholeFile(image_path, &bytes)) {
@@ -203,10 +236,10 @@ std::string readGridMap(const std::string& yaml_path, GridMapFile* grid) {
            " bytes of pixels, " + std::to_string(cells) + " expected (the file is cut short)";
   }
   GridMapFile result;
-  result.resolution = resolution;
-  result.origin_x = origin[0];
-  result.origin_y = origin[1];
-  result.origin_yaw = origin[2];
+  result.resolution = keys.resolution;
+  result.origin_x = keys.origin[0];
+  result.origin_y = keys.origin[1];
+  result.origin_yaw = keys.origin[2];
   result.width = static_cast<int>(width);
   result.height = static_cast<int>(height);
   result.cells.resize(static_cast<size_t>(cells));
@@ -214,8 +247,11 @@ std::string readGridMap(const std::string& yaml_path, GridMapFile* grid) {
     const size_t to = static_cast<size_t>(height - 1 - row) * width;
     for (long col = 0; col < width; ++col) {
       const double pixel = static_cast<unsigned char>(bytes[at + row * width + col]);
-      const double occupancy = negate != 0.0 ? pixel / max_value : (max_value - pixel) / max_value;
-      result.cells[to + col] = occupancy > occupied ? 100 : occupancy < free_below ? 0 : -1;
+      const double occupancy =
+          keys.negate != 0.0 ? pixel / max_value : (max_value - pixel) / max_value;
+      result.cells[to + col] = occupancy > keys.occupied     ? 100
+                               : occupancy < keys.free_below ? 0
+                                                             : -1;
     }
   }
   *grid = std::move(result);

@@ -11,7 +11,10 @@
 // The grid holds the values of a nav_msgs/OccupancyGrid: -1 unknown, 0 free,
 // 100 occupied (map_server's trinary mode). Written as pixels 205, 254 and
 // 0, which map_server, and readGridMap, read back as the same three values,
-// so a save and a load give the grid bit for bit. No ROS, no yaml-cpp.
+// so a save and a load give the grid bit for bit. The YAML file is read
+// with yaml-cpp, as map_server reads it: any YAML of the same content loads
+// (block or flow style, `origin` as a block list, keys in any order or
+// quoted, comments). No ROS.
 #pragma once
 
 #include <cstdint>
@@ -33,16 +36,19 @@ constexpr long kMaxGridCells = 100000000;
 // Writes `yaml_path` and the image beside it (the same name, .pgm instead of
 // .yaml), each atomically (atomic_file.h): the image first, so that the YAML
 // file never names an image that is not complete. Values other than -1, 0
-// and 100 are written as map_server would threshold them.
+// and 100 are written as map_server would threshold them. An image name
+// that YAML would read differently written plain (one with ': ' or ' #',
+// say) is double-quoted.
 std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid);
 // The image writeGridMap writes beside `yaml_path`.
 std::string imagePathFor(const std::string& yaml_path);
 
 // Reads a map_server map (trinary mode; a binary PGM, P5). On error returns
-// "<path>: <problem>" and leaves `grid` untouched: a missing or unreadable
-// image, a size that disagrees with the data, a resolution or origin that
-// is not finite and positive where it must be, a mode other than trinary,
-// more than kMaxGridCells cells.
+// "<path>:<line>: <problem>" ("<path>: <problem>" when no line is at fault)
+// and leaves `grid` untouched: text that is not YAML, a key given twice, a
+// missing or unreadable image, a size that disagrees with the data, a
+// resolution or origin that is not finite and positive where it must be, a
+// mode other than trinary, more than kMaxGridCells cells.
 std::string readGridMap(const std::string& yaml_path, GridMapFile* grid);
 
 }  // namespace ekf_slam

@@ -106,6 +106,96 @@ TEST_F(GridMapFileTest, ReadsMapServerMapsWithTheirOwnThresholds) {
   EXPECT_EQ(grid.cells, (std::vector<int8_t>{0, -1, 100, 100}));
 }
 
+// The YAML file writeGridMap gave for randomGrid(.., ..) at g.yaml, loaded
+// and dumped again by PyYAML (python3-yaml 6.0):
+//   d = yaml.safe_load(text)
+//   yaml.safe_dump(d, default_flow_style=False)  # kPyYamlBlockText
+//   yaml.safe_dump(d, default_flow_style=True)   # kPyYamlFlowText
+// Keys sorted, numbers in their shortest form, `origin` a block list
+// (block) or a flow list over two lines (flow).
+const char kWrittenText[] =
+    "image: g.pgm\nresolution: 0.05000000074505806\n"
+    "origin: [-12.345678901234001, 0.42857142857142855, 0]\nnegate: 0\n"
+    "occupied_thresh: 0.65\nfree_thresh: 0.196\n";
+const char kPyYamlBlockText[] =
+    "free_thresh: 0.196\nimage: g.pgm\nnegate: 0\noccupied_thresh: 0.65\norigin:\n"
+    "- -12.345678901234\n- 0.42857142857142855\n- 0\nresolution: 0.05000000074505806\n";
+const char kPyYamlFlowText[] =
+    "{free_thresh: 0.196, image: g.pgm, negate: 0, occupied_thresh: 0.65, origin: "
+    "[-12.345678901234,\n"
+    "    0.42857142857142855, 0], resolution: 0.05000000074505806}\n";
+
+TEST_F(GridMapFileTest, TheWrittenYamlIsUnchangedAndPyYamlsDumpsOfItLoad) {
+  const GridMapFile saved = randomGrid(9, 5, 6);
+  ASSERT_EQ(writeGridMap(dir_ + "/g.yaml", saved), "");
+  EXPECT_EQ(readText("g.yaml"), kWrittenText);
+  for (const char* text : {kPyYamlBlockText, kPyYamlFlowText}) {
+    writeText("g.yaml", text);
+    GridMapFile loaded;
+    ASSERT_EQ(readGridMap(dir_ + "/g.yaml", &loaded), "") << text;
+    EXPECT_EQ(loaded.resolution, saved.resolution);
+    EXPECT_EQ(loaded.origin_x, saved.origin_x);
+    EXPECT_EQ(loaded.origin_y, saved.origin_y);
+    EXPECT_EQ(loaded.origin_yaw, saved.origin_yaw);
+    EXPECT_EQ(loaded.width, saved.width);
+    EXPECT_EQ(loaded.cells, saved.cells);
+  }
+  // Quoted keys and values, comments, a map_server key this reader does not need.
+  writeText("g.yaml",
+            "# a hand-edited map\n'image': \"g.pgm\"  # beside this file\n"
+            "\"resolution\": '0.05000000074505806'\norigin: [-12.345678901234,\n"
+            "  0.42857142857142855, 0.0]\nmode: trinary\nstart_pose: [1, 1, 0]\n");
+  GridMapFile loaded;
+  ASSERT_EQ(readGridMap(dir_ + "/g.yaml", &loaded), "");
+  EXPECT_EQ(loaded.cells, saved.cells);
+  EXPECT_EQ(loaded.origin_y, saved.origin_y);
+}
+
+// A name YAML would read otherwise written plain is quoted, and loads.
+TEST_F(GridMapFileTest, AnImageNameThatNeedsQuotesIsQuoted) {
+  const GridMapFile saved = randomGrid(4, 3, 7);
+  const std::string path = dir_ + "/office: #2.yaml";
+  ASSERT_EQ(writeGridMap(path, saved), "");
+  EXPECT_EQ(readText("office: #2.yaml").rfind("image: \"office: #2.pgm\"\n", 0), 0u);
+  GridMapFile loaded;
+  ASSERT_EQ(readGridMap(path, &loaded), "");
+  EXPECT_EQ(loaded.cells, saved.cells);
+}
+
+TEST_F(GridMapFileTest, YamlErrorsNameTheLineAndLeaveTheGridAlone) {
+  ASSERT_EQ(writeGridMap(dir_ + "/g.yaml", randomGrid(3, 3, 8)), "");
+  const GridMapFile kept = randomGrid(2, 2, 3);
+  struct Case {
+    std::string yaml;
+    std::string expected;
+  };
+  const std::string head = "image: g.pgm\nresolution: 0.05\n";
+  const Case cases[] = {
+      {head + "origin: [0, 0]\n", "g.yaml:3: origin must be [x, y, yaw], three finite numbers"},
+      {head + "origin:\n- 0\n- nan\n- 0\n", "g.yaml:4: origin must be [x, y, yaw]"},
+      {head + "origin: {x: 0}\n", "g.yaml:3: origin must be [x, y, yaw]"},
+      {head + "origin: [0, 0, 0\n", "g.yaml:3: not valid YAML"},
+      {head + "origin: [0, 0, 0]\nresolution: 0.1\n", "g.yaml:4: key 'resolution' given twice"},
+      {head + "origin: [0, 0, 0]\nnegate: 2\n", "g.yaml:4: negate must be 0 or 1"},
+      {head + "origin: [0, 0, 0]\n\nmode: scale\n", "g.yaml:5: mode 'scale': only trinary"},
+      {"image: [g.pgm]\nresolution: 0.05\norigin: [0, 0, 0]\n", "g.yaml:1: image must be a file"},
+      {"- image: g.pgm\n", "g.yaml:1: expected map_server's keys"},
+      {head + "origin: [0, 0, 0]\n---\nimage: g.pgm\n", "g.yaml:4: more than one YAML document"},
+      {head + "origin: [0, 0, 0]\n]\n", "g.yaml:4: not valid YAML"},
+      {"{image: g.pgm, resolution: 0.05, origin: [0, 0, 0]},\n",
+       "g.yaml:1: more than one YAML document"},
+      {"image:\nresolution: 0.05\norigin: [0, 0, 0]\n", "g.yaml: no 'image'"},
+      {head, "g.yaml: no 'origin'"},
+  };
+  for (const Case& c : cases) {
+    writeText("g.yaml", c.yaml);
+    GridMapFile grid = kept;
+    const std::string error = readGridMap(dir_ + "/g.yaml", &grid);
+    EXPECT_EQ(error.find(dir_ + "/" + c.expected), 0u) << c.yaml << " → " << error;
+    EXPECT_EQ(grid.cells, kept.cells);
+  }
+}
+
 TEST_F(GridMapFileTest, BrokenFilesAreRefusedNamedAndLeaveTheGridAlone) {
   const GridMapFile saved = randomGrid(10, 10, 2);
   ASSERT_EQ(writeGridMap(dir_ + "/g.yaml", saved), "");
