@@ -38,6 +38,7 @@ class ClockJump(unittest.TestCase):
         self.landmarks = 0
         self.diagnostics_wall = []
         self.drops = {}
+        self.waiting = 0
         self.stamps = [[], []]
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("landmark_map", LandmarkMap, self.on_map, queue_size=10)
@@ -57,6 +58,8 @@ class ClockJump(unittest.TestCase):
             self.diagnostics_wall.append(time.time())
             for status in msg.status:
                 for kv in status.values:
+                    if kv.key == "scans waiting for transforms":
+                        self.waiting = int(kv.value)
                     if kv.key.startswith("dropped") and kv.value not in ("0", "False"):
                         self.drops[kv.key] = kv.value
 
@@ -87,8 +90,9 @@ class ClockJump(unittest.TestCase):
         end_of_play = time.time()
         time.sleep(3.5)
         print("scans per pass %d; poses %s; landmarks after the first pass %d, at the end %d; "
-              "dropped: %s" % (scans, self.pass_poses, first_landmarks, self.landmarks,
-                               self.drops or "none"))
+              "dropped: %s; waiting for transforms at the end %d" %
+              (scans, self.pass_poses, first_landmarks, self.landmarks, self.drops or "none",
+               self.waiting))
         missing = sorted(set(self.stamps[0]) - set(self.stamps[1]))
         print("scans of the first pass without a pose in the second: %d, %s ... %s" %
               (len(missing), missing[:5], missing[-5:]))
