@@ -231,6 +231,13 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
   if (history_.add(r, scan) > 0) back_end_.forgetBefore(history_.firstScan(), filter_.filter());
 }
 
+std::vector<StampedPose> SlamPipeline::smoothedScanPoses(FullSmootherResult* details,
+                                                         LandmarkGraph* last_problem) const {
+  return solveSmoothing(history_, filter_.filter(), back_end_.loopConstraints(history_),
+                        back_end_.loopClosedIterationPoses(history_), options_.smoother, details,
+                        last_problem);
+}
+
 SmoothingProblem SlamPipeline::smoothingProblem() const {
   return {history_, filter_.filter(), back_end_.loopConstraints(history_),
           back_end_.loopClosedIterationPoses(history_), options_.smoother};

@@ -130,9 +130,7 @@ class SlamPipeline {
   // `details` (if given) receives its result, `last_problem` (if given) the
   // problem of its last optimisation (see smoothFull).
   std::vector<StampedPose> smoothedScanPoses(FullSmootherResult* details = nullptr,
-                                             LandmarkGraph* last_problem = nullptr) const {
-    return smoothingProblem().solve(details, last_problem);
-  }
+                                             LandmarkGraph* last_problem = nullptr) const;
   // The full smoother's problem as a copy (it waits for the back end's
   // thread): to be solved elsewhere while the pipeline goes on.
   SmoothingProblem smoothingProblem() const;

@@ -6,6 +6,14 @@ namespace ekf_slam {
 
 std::vector<StampedPose> SmoothingProblem::solve(FullSmootherResult* details,
                                                  LandmarkGraph* last_problem) const {
+  return solveSmoothing(history, filter, loops, initial, options, details, last_problem);
+}
+
+std::vector<StampedPose> solveSmoothing(const ScanHistory& history, const EkfSlam& filter,
+                                        const std::vector<IterationConstraint>& loops,
+                                        const std::vector<Pose2>& initial,
+                                        const FullSmootherOptions& options,
+                                        FullSmootherResult* details, LandmarkGraph* last_problem) {
   const FullSmootherRecorder& record = history.smootherRecord();
   FullSmootherResult result;
   if (history.firstIteration() > 0 && !initial.empty()) {

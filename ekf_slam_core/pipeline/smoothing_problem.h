@@ -29,4 +29,12 @@ struct SmoothingProblem {
                                  LandmarkGraph* last_problem = nullptr) const;
 };
 
+// SmoothingProblem::solve on the parts where they lie (no copy: a
+// pipeline solved on its own thread, as the offline runner does).
+std::vector<StampedPose> solveSmoothing(const ScanHistory& history, const EkfSlam& filter,
+                                        const std::vector<IterationConstraint>& loops,
+                                        const std::vector<Pose2>& initial,
+                                        const FullSmootherOptions& options,
+                                        FullSmootherResult* details, LandmarkGraph* last_problem);
+
 }  // namespace ekf_slam
