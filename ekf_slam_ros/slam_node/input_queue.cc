@@ -174,13 +174,13 @@ void InputQueue::releaseInOrder() {
       continue;
     }
     if (!waiting_.front().ready) return;
-    const PendingInput pending = std::move(waiting_.front());
+    PendingInput pending = std::move(waiting_.front());
     waiting_.pop_front();
-    release(pending);
+    release(std::move(pending));
   }
 }
 
-void InputQueue::release(const PendingInput& pending) {
+void InputQueue::release(PendingInput pending) {
   const ros::Time stamp = pending.header.stamp;
   std::ostringstream detail = detailStream();
   Pose2 odometry;
@@ -190,19 +190,13 @@ void InputQueue::release(const PendingInput& pending) {
     drops_.drop(DropReason::kOdomTransformMissing, detail.str());
     return;
   }
-  ros_conversions::LaserMount mount;
+  ros_conversions::LaserMount& mount = pending.mount;
   if (!transforms_.lookupMount(params_.base_frame, pending.header.frame_id, stamp, &mount, &why)) {
     detail << "scan at " << stamp.toSec() << ": " << why << "; the map is not touched";
     drops_.drop(DropReason::kLaserTransformMissing, detail.str());
     return;
   }
-  if (!mount.inverted) {
-    PendingInput released = pending;
-    released.mount = mount;
-    hooks_.released(released, odometry, mount.pose);
-    return;
-  }
-  if (!pending.scan) {
+  if (mount.inverted && !pending.scan) {
     detail << "features at " << stamp.toSec() << ": " << params_.base_frame << " -> "
            << pending.header.frame_id
            << " is upside down (its z axis points down); features extracted from such a scan "
@@ -210,10 +204,8 @@ void InputQueue::release(const PendingInput& pending) {
     drops_.drop(DropReason::kLaserUpsideDown, detail.str());
     return;
   }
-  PendingInput mirrored = pending;
-  mirrored.mount = mount;
-  mirrored.scan = mirroredScan(*pending.scan);
-  hooks_.released(mirrored, odometry, mount.pose);
+  if (mount.inverted) pending.scan = mirroredScan(*pending.scan);
+  hooks_.released(pending, odometry, mount.pose);
 }
 
 void InputQueue::onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason) {

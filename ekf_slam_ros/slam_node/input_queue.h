@@ -91,7 +91,7 @@ class InputQueue {
   void onTransformsFailed(const void* message, tf2_ros::FilterFailureReason reason);
   // Processes the ready inputs at the head of the queue, in arrival order.
   void releaseInOrder();
-  void release(const PendingInput& pending);
+  void release(PendingInput pending);
   // Drops (and counts, once) inputs that have waited longer than tf_timeout
   // for a transform that is missing rather than merely behind.
   void expireWaiting();

@@ -53,9 +53,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
              params_.map_update_interval > 0.0 && config_.pipeline.loop_closure.enabled, *this),
       services_(node, private_node, params_, config_.map, *this, outputs_, grids_),
       input_(node, params_, transforms_, drops_,
-             {[this] { return services_.paused(); },
-              // map → odom goes out again with the new data's stamps.
-              [this] { onClockJump(); },
+             {[this] { return services_.paused(); }, [this] { onClockJump(); },
               [this](const PendingInput& pending, const Pose2& odometry, const Pose2& laser) {
                 onReleased(pending, odometry, laser);
               }}),
