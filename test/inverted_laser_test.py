@@ -165,7 +165,7 @@ class InvertedLaser(unittest.TestCase):
 if __name__ == "__main__":
     parser = argparse.ArgumentParser()
     parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=200.0)
+    parser.add_argument("--seconds", type=float, default=150.0)
     parser.add_argument("--rate", type=float, default=4.0)
     args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
     InvertedLaser.args = args

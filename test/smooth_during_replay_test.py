@@ -147,7 +147,7 @@ class SmoothDuringReplay(unittest.TestCase):
 if __name__ == "__main__":
     parser = argparse.ArgumentParser()
     parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=1000.0)
+    parser.add_argument("--seconds", type=float, default=700.0)
     parser.add_argument("--rate", type=float, default=20.0)
     args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
     SmoothDuringReplay.args = args
