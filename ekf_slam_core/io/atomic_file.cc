@@ -11,10 +11,7 @@
 #include <sstream>
 
 namespace ekf_slam {
-namespace {
 
-// The file a write to `path` lands in: `path`, or the end of the chain of
-// symlinks it starts (a dangling one included: the write creates its target).
 std::string writeTarget(const std::string& path) {
   std::string current = path;
   for (int hop = 0; hop < 40; ++hop) {  // more: a loop, which the write then reports
@@ -33,6 +30,8 @@ std::string writeTarget(const std::string& path) {
   return current;
 }
 
+namespace {
+
 const char* kindOf(mode_t mode) {
   if (S_ISDIR(mode)) return "a directory";
   if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
@@ -49,13 +48,15 @@ std::string writeTargetProblem(const std::string& path) {
   return path + ": is " + kindOf(status.st_mode) + ", not a regular file";
 }
 
-std::string writeFileAtomically(const std::string& path_given, const std::string& bytes) {
-  const std::string problem = writeTargetProblem(path_given);
-  if (!problem.empty()) return problem + " (nothing written)";
-  const std::string path = writeTarget(path_given);
-  std::string temp = path + ".XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) return path + ": cannot create a temporary file beside it: " + std::strerror(errno);
+std::string temporaryPattern(const std::string& path) { return path + ".saving-XXXXXX"; }
+
+std::string writeTemporary(const std::string& path, const std::string& bytes, std::string* temp) {
+  *temp = temporaryPattern(path);
+  const int fd = ::mkstemp(temp->data());
+  if (fd < 0) {
+    temp->clear();
+    return path + ": cannot create a temporary file beside it: " + std::strerror(errno);
+  }
   std::string error;
   size_t done = 0;
   while (done < bytes.size() && error.empty()) {
@@ -76,11 +77,26 @@ std::string writeFileAtomically(const std::string& path_given, const std::string
             "); the earlier file is unchanged";
   }
   if (::close(fd) != 0 && error.empty()) error = path + ": close failed: " + std::strerror(errno);
-  if (error.empty() && std::rename(temp.c_str(), path.c_str()) != 0) {
-    error = path + ": cannot replace it: " + std::strerror(errno);
+  if (!error.empty()) {
+    ::unlink(temp->c_str());
+    temp->clear();
   }
-  if (!error.empty()) ::unlink(temp.c_str());
   return error;
+}
+
+std::string writeFileAtomically(const std::string& path_given, const std::string& bytes) {
+  const std::string problem = writeTargetProblem(path_given);
+  if (!problem.empty()) return problem + " (nothing written)";
+  const std::string path = writeTarget(path_given);
+  std::string temp;
+  const std::string error = writeTemporary(path, bytes, &temp);
+  if (!error.empty()) return error;
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const std::string why = path + ": cannot replace it: " + std::strerror(errno);
+    ::unlink(temp.c_str());
+    return why;
+  }
+  return "";
 }
 
 bool readWholeFile(const std::string& path, std::string* bytes) {

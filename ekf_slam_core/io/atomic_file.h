@@ -21,6 +21,18 @@ std::string writeFileAtomically(const std::string& path, const std::string& byte
 // for a caller that writes several files to check them all first.
 std::string writeTargetProblem(const std::string& path);
 
+// The file a write to `path` lands in: `path`, or the end of the chain of
+// symlinks it starts (a dangling one included: the write creates its target).
+std::string writeTarget(const std::string& path);
+
+// `bytes` in a new temporary file beside `path` (<path>.saving-XXXXXX, see
+// temporaryPattern), mode 0644, flushed to the disk; its name in `temp`.
+// On failure nothing is left, `temp` is empty and the problem is returned.
+std::string writeTemporary(const std::string& path, const std::string& bytes, std::string* temp);
+
+// The name pattern of those temporaries: <path>.saving-XXXXXX.
+std::string temporaryPattern(const std::string& path);
+
 // The whole file; false when it cannot be opened or read.
 bool readWholeFile(const std::string& path, std::string* bytes);
 

@@ -71,7 +71,8 @@ std::string imagePathFor(const std::string& yaml_path) {
   return yaml_path + ".pgm";
 }
 
-std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) {
+std::string formatGridMap(const std::string& yaml_path, const GridMapFile& grid,
+                          std::vector<FileSetEntry>* files) {
   const long cells = static_cast<long>(grid.width) * grid.height;
   if (grid.width <= 0 || grid.height <= 0 || cells > kMaxGridCells ||
       static_cast<long>(grid.cells.size()) != cells) {
@@ -97,8 +98,6 @@ std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) 
           static_cast<char>(pixelFor(grid.cells[from + col]));
     }
   }
-  std::string error = writeFileAtomically(image_path, image);
-  if (!error.empty()) return error;
   const size_t slash = image_path.find_last_of('/');
   const std::string image_name =
       slash == std::string::npos ? image_path : image_path.substr(slash + 1);
@@ -107,8 +106,15 @@ std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) 
                 "resolution: %.17g\norigin: [%.17g, %.17g, %.17g]\nnegate: 0\n"
                 "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
                 grid.resolution, grid.origin_x, grid.origin_y, grid.origin_yaw);
-  return writeFileAtomically(yaml_path,
-                             "image: " + io_yaml::scalarText(image_name) + "\n" + numbers);
+  files->push_back({image_path, std::move(image)});
+  files->push_back({yaml_path, "image: " + io_yaml::scalarText(image_name) + "\n" + numbers});
+  return "";
+}
+
+std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid) {
+  std::vector<FileSetEntry> files;
+  const std::string error = formatGridMap(yaml_path, grid, &files);
+  return error.empty() ? writeFileSet(journalFor(yaml_path), files) : error;
 }
 
 namespace {

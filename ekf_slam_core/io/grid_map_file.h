@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "ekf_slam_core/io/file_set.h"
+
 namespace ekf_slam {
 
 struct GridMapFile {
@@ -33,12 +35,15 @@ struct GridMapFile {
 // Largest grid read or written: 10⁸ cells (100 MB), 500 km² at 5 cm.
 constexpr long kMaxGridCells = 100000000;
 
-// Writes `yaml_path` and the image beside it (the same name, .pgm instead of
-// .yaml), each atomically (atomic_file.h): the image first, so that the YAML
-// file never names an image that is not complete. Values other than -1, 0
-// and 100 are written as map_server would threshold them. An image name
-// that YAML would read differently written plain (one with ': ' or ' #',
-// say) is double-quoted.
+// The two files of `grid` saved as `yaml_path`, appended to `files`: the
+// image beside it (the same name, .pgm instead of .yaml), then the
+// map_server YAML that names it. Values other than -1, 0 and 100 are
+// written as map_server would threshold them. An image name that YAML
+// would read differently written plain (one with ': ' or ' #', say) is
+// double-quoted. Empty on success, else the problem (nothing appended).
+std::string formatGridMap(const std::string& yaml_path, const GridMapFile& grid,
+                          std::vector<FileSetEntry>* files);
+// Writes both as one set (file_set.h; the journal is journalFor(yaml_path)).
 std::string writeGridMap(const std::string& yaml_path, const GridMapFile& grid);
 // The image writeGridMap writes beside `yaml_path`.
 std::string imagePathFor(const std::string& yaml_path);
