@@ -10,38 +10,25 @@ Plays the first --seconds of the bag, then plays it again, as rosbag play
   the first pass's with the second added; --mode continue: the first
   pass's landmarks are kept (the second pass adds at most a few).
 """
-import argparse
-import os
-import subprocess
-import sys
 import threading
 import time
-import unittest
 
-import rosbag
 import rospy
-import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from ekf_slam.msg import LandmarkMap
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
+from ekf_slam_tools.replay_test import ReplayTest, main
 
-class ClockJump(unittest.TestCase):
-    args = None
 
+class ClockJump(ReplayTest):
     def setUp(self):
-        if not os.path.exists(self.args.bag):
-            self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
+        super().setUp()
         self.lock = threading.Lock()
         self.current = 0
         self.landmarks = 0
-        self.diagnostics_wall = []
-        self.drops = {}
-        self.waiting = 0
         self.stamps = [[], []]  # of the poses received during each pass
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("landmark_map", LandmarkMap, self.on_map, queue_size=10)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
 
     def on_pose(self, msg):
         with self.lock:
@@ -51,50 +38,29 @@ class ClockJump(unittest.TestCase):
         with self.lock:
             self.landmarks = len(msg.landmarks)
 
-    def on_diagnostics(self, msg):
-        with self.lock:
-            self.diagnostics_wall.append(time.time())
-            for status in msg.status:
-                for kv in status.values:
-                    if kv.key == "scans waiting for transforms":
-                        self.waiting = int(kv.value)
-                    if kv.key.startswith("dropped") and kv.value not in ("0", "False"):
-                        self.drops[kv.key] = kv.value
-
     def poses(self):
         with self.lock:
             return len(self.stamps[0]) + len(self.stamps[1])
 
-    def play(self):
-        subprocess.check_call(["rosbag", "play", "--clock", "--quiet", "-r", str(self.args.rate),
-                               "-u", str(self.args.seconds), self.args.bag])
-        last = -1
-        while self.poses() != last:  # the node finishes its queue
-            last = self.poses()
-            time.sleep(1.5)
-
     def test_the_second_pass_is_mapped(self):
-        deadline = time.time() + 30.0
-        while rospy.get_param("/use_sim_time", False) is not True and time.time() < deadline:
-            time.sleep(0.1)
-        rospy.wait_for_service("ekf_slam/reset", timeout=60.0)
-        time.sleep(1.0)
-        with rosbag.Bag(self.args.bag) as bag:
-            end = bag.get_start_time() + self.args.seconds
-            scans = sum(1 for _, _, t in bag.read_messages(topics=["/scan"]) if t.to_sec() <= end)
+        self.wait_for_node()
+        scans = self.played_scans()
         start = time.time()
         self.play()
+        self.settle(self.poses, period=1.5)  # the node finishes its queue
         first_landmarks = self.landmarks
         with self.lock:
             self.current = 1
         second_start = time.time()
         self.play()
+        self.settle(self.poses, period=1.5)
         end_of_play = time.time()
         time.sleep(3.5)
         print("scans per pass %d; poses %s; landmarks after the first pass %d, at the end %d; "
               "dropped: %s; waiting for transforms at the end %d" %
-              (scans, [len(p) for p in self.stamps], first_landmarks, self.landmarks, self.drops or "none",
-               self.waiting))
+              (scans, [len(p) for p in self.stamps], first_landmarks, self.landmarks,
+               self.diagnostics.drops() or "none",
+               self.diagnostics.count("scans waiting for transforms")))
         missing = sorted(set(self.stamps[0]) - set(self.stamps[1]))
         print("scans of the first pass without a pose in the second: %d, %s ... %s" %
               (len(missing), missing[:5], missing[-5:]))
@@ -105,8 +71,7 @@ class ClockJump(unittest.TestCase):
         self.assertGreater(len(self.stamps[1]), 0.9 * scans,
                            "the second pass was not mapped")
 
-        with self.lock:
-            walls = list(self.diagnostics_wall)
+        walls = self.diagnostics.walls()
         for a, b in ((start, second_start), (second_start, end_of_play),
                      (end_of_play, end_of_play + 3.5)):
             self.assertGreaterEqual(sum(1 for t in walls if a <= t <= b), 2,
@@ -125,12 +90,5 @@ class ClockJump(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=100.0)
-    parser.add_argument("--rate", type=float, default=10.0)
-    parser.add_argument("--mode", default="new_map")
-    args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
-    ClockJump.args = args
-    rospy.init_node("clock_jump_test")
-    rostest.rosrun("ekf_slam", "clock_jump", ClockJump)
+    main(ClockJump, "clock_jump", seconds=100.0, rate=10.0,
+         add_arguments=lambda parser: parser.add_argument("--mode", default="new_map"))

@@ -10,27 +10,25 @@ scan topic. Checks:
 - the upright and the inverted node publish the same poses and the same
   landmarks, within 1 cm (an unmirrored inverted scan maps a mirror image:
   metres off);
-- /diagnostics names each mount; the pitched node WARNs with its tilt.
+- /diagnostics names each mount; the pitched node WARNs with its tilt;
+- the pitched node (publish_tf: false) sends no map -> odom, the others do.
 """
-import argparse
 import copy
 import math
 import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import threading
 import time
-import unittest
 
 import rosbag
 import rospy
-import rostest
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
 from ekf_slam.msg import LandmarkMap
+from tf2_msgs.msg import TFMessage
 
+from ekf_slam_tools.replay_test import ReplayTest, main
 from ekf_slam_tools.se2 import wrap, yaw_of
 
 TOLERANCE = 0.01  # m (and rad for the headings): the same map
@@ -53,21 +51,18 @@ def mount(parent, child, stamp, roll=0.0, pitch=0.0):
     return t
 
 
-class InvertedLaser(unittest.TestCase):
-    args = None
-
+class InvertedLaser(ReplayTest):
     def setUp(self):
-        if not os.path.exists(self.args.bag):
-            self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
+        super().setUp()
         self.lock = threading.Lock()
         self.poses = {n: {} for n in NODES}
         self.maps = {}
-        self.status = {}  # node -> (level, message, {key: value})
+        self.map_frames = set()  # parents of the map -> odom transforms on /tf
+        rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
         for n in NODES:
             rospy.Subscriber("/%s/pose" % n, PoseWithCovarianceStamped, self.on_pose, n,
                              queue_size=10000)
             rospy.Subscriber("/%s/landmark_map" % n, LandmarkMap, self.on_map, n, queue_size=10)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
 
     def on_pose(self, msg, node):
         p = msg.pose.pose
@@ -75,16 +70,14 @@ class InvertedLaser(unittest.TestCase):
             self.poses[node][round(msg.header.stamp.to_sec(), 6)] = (
                 p.position.x, p.position.y, yaw_of(p.orientation))
 
+    def on_tf(self, msg):
+        with self.lock:
+            self.map_frames.update(t.header.frame_id for t in msg.transforms
+                                   if t.child_frame_id == "odom")
+
     def on_map(self, msg, node):
         with self.lock:
             self.maps[node] = msg
-
-    def on_diagnostics(self, msg):
-        with self.lock:
-            for s in msg.status:
-                for n in NODES:
-                    if s.name.startswith("%s/" % n):  # "upright/upright: EKF-SLAM"
-                        self.status[n] = (s.level, s.message, {kv.key: kv.value for kv in s.values})
 
     def write_bag(self, path):
         with rosbag.Bag(self.args.bag) as source, rosbag.Bag(path, "w") as out:
@@ -115,16 +108,11 @@ class InvertedLaser(unittest.TestCase):
             bag = os.path.join(work, "mounts.bag")
             self.write_bag(bag)
             for n in NODES:
-                rospy.wait_for_service("/%s/%s/reset" % (n, n), timeout=60.0)
-            time.sleep(1.0)
-            subprocess.check_call(["rosbag", "play", "--clock", "--quiet", "-r",
-                                   str(self.args.rate), bag])
+                self.wait_for_node("/%s/%s/reset" % (n, n))
+            self.play(bag, seconds=0)  # the whole copy
         finally:
             shutil.rmtree(work, ignore_errors=True)
-        last = -1
-        while sum(len(p) for p in self.poses.values()) != last:
-            last = sum(len(p) for p in self.poses.values())
-            time.sleep(2.0)
+        self.settle(lambda: sum(len(p) for p in self.poses.values()))
         time.sleep(2.0)  # one more /diagnostics
 
         upright, inverted = self.poses["upright"], self.poses["inverted"]
@@ -152,22 +140,19 @@ class InvertedLaser(unittest.TestCase):
             self.assertIn(l.id, theirs)
             self.assertLess(math.hypot(l.x - theirs[l.id].x, l.y - theirs[l.id].y), TOLERANCE)
 
-        self.assertEqual(self.status["upright"][2].get("laser mount"), "upright")
-        self.assertEqual(self.status["inverted"][2].get("laser mount"),
+        self.assertEqual(self.diagnostics.values("upright/").get("laser mount"), "upright")
+        self.assertEqual(self.diagnostics.values("inverted/").get("laser mount"),
                          "upside down (scans mirrored)")
-        level, message, values = self.status["pitched"]
+        level, message, values = self.diagnostics.status("pitched/")
         print("pitched: %s" % message)
         self.assertEqual(level, DiagnosticStatus.WARN)
         self.assertIn("laser_pitched is tilted 10.0 deg", message)
         self.assertAlmostEqual(float(values["laser tilt [deg]"]), 10.0, places=1)
 
+        print("map -> odom sent by: %s" % sorted(self.map_frames))
+        self.assertGreater(len(self.poses["pitched"]), 500)
+        self.assertEqual(self.map_frames, {"map_upright", "map_inverted"})
+
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=150.0)
-    parser.add_argument("--rate", type=float, default=4.0)
-    args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
-    InvertedLaser.args = args
-    rospy.init_node("inverted_laser_test")
-    rostest.rosrun("ekf_slam", "inverted_laser", InvertedLaser)
+    main(InvertedLaser, "inverted_laser", seconds=150.0, rate=4.0)

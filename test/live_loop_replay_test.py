@@ -23,26 +23,22 @@ correction takes effect as soon as the back end has it) they agree except
 in short runs of scans after a correction that the node's back end
 delivered later than the offline runner's.
 """
-import argparse
 import bisect
 import math
 import os
 import shutil
 import struct
 import subprocess
-import sys
 import tempfile
 import time
-import unittest
 
 import rosbag
 import rospy
-import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Path
 from tf2_msgs.msg import TFMessage
 
+from ekf_slam_tools.replay_test import ReplayTest, main
 from ekf_slam_tools.se2 import wrap, yaw_of
 
 POSITION_TOLERANCE = 0.01  # m: live and offline agree to this …
@@ -62,27 +58,19 @@ def scan_stamp(raw):
     return rospy.Time(*struct.unpack_from("<II", raw[1], 4)).to_sec()
 
 
-class LiveLoopReplay(unittest.TestCase):
-    args = None
-
+class LiveLoopReplay(ReplayTest):
     def setUp(self):
-        if not os.path.exists(self.args.bag):
-            self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
+        super().setUp()
         self.poses = []  # (stamp, x, y, theta)
         self.map_to_odom = []  # (stamp, x, y, theta, wall time received)
         self.pose_wall = {}  # scan stamp (rounded to 1 µs) -> wall time its pose arrived
         self.odom_to_base = []  # (stamp, x, y, theta)
         self.maps = []
         self.loop_paths = []  # stamps of loop_closed_path messages
-        self.loops_accepted = 0
-        self.drops = {}  # the node's "dropped: <reason>" counters
-        self.received = 0  # scans the node received
-        self.diagnostics_wall = []  # wall time of each /diagnostics message
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("map", OccupancyGrid, self.on_map, queue_size=5)
         rospy.Subscriber("loop_closed_path", Path, self.on_loop_path, queue_size=100)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
 
     def on_pose(self, msg):
         p = msg.pose.pose
@@ -106,29 +94,10 @@ class LiveLoopReplay(unittest.TestCase):
                 self.odom_to_base.append((t.header.stamp.to_sec(), r.translation.x,
                                           r.translation.y, yaw_of(r.rotation)))
 
-    def on_diagnostics(self, msg):
-        self.diagnostics_wall.append(time.time())
-        for status in msg.status:
-            for kv in status.values:
-                if kv.key == "loops accepted":
-                    self.loops_accepted = max(self.loops_accepted, int(kv.value))
-                elif kv.key == "scans received":
-                    self.received = max(self.received, int(kv.value))
-                elif kv.key.startswith("dropped: ") and int(kv.value) > 0:
-                    self.drops[kv.key[len("dropped: "):]] = int(kv.value)
-
-    def play(self):
-        deadline = time.time() + 30.0
-        while rospy.get_param("/use_sim_time", False) is not True and time.time() < deadline:
-            time.sleep(0.1)
-        time.sleep(2.0)  # the node and its subscriptions are up
-        subprocess.check_call(["rosbag", "play", "--clock", "--quiet", "-r", str(self.args.rate),
-                               "-u", str(self.args.seconds), self.args.bag])
-        # The node finishes its queue, the map thread its last grid.
-        last = -1
-        while len(self.poses) != last:
-            last = len(self.poses)
-            time.sleep(2.0)
+    def play_and_settle(self):
+        self.wait_for_node()
+        self.play()
+        self.settle(lambda: len(self.poses))  # the node's queue, the map thread's last grid
 
     def offline(self, processed):
         """trajectory_live.txt of ekf_slam_offline on the scans in `processed`.
@@ -237,7 +206,7 @@ class LiveLoopReplay(unittest.TestCase):
         return steps, after
 
     def test_live_map_loops_and_causal_poses(self):
-        self.play()
+        self.play_and_settle()
         self.assertGreater(len(self.poses), 1000, "the node published too few poses")
 
         # /diagnostics runs on wall time: it keeps coming (every
@@ -245,9 +214,10 @@ class LiveLoopReplay(unittest.TestCase):
         # clock, has stopped and the node has caught up.
         settled = time.time()
         time.sleep(3.5)
-        late = [t for t in self.diagnostics_wall if t > settled]
+        walls = self.diagnostics.walls()
+        late = [t for t in walls if t > settled]
         self.assertGreaterEqual(len(late), 2, "%d /diagnostics in the 3.5 s after the clock "
-                                "stopped (%d before)" % (len(late), len(self.diagnostics_wall)))
+                                "stopped (%d before)" % (len(late), len(walls)))
 
         # The map, while the log played: trinary values, walls and free space.
         self.assertGreater(len(self.maps), 2, "no map published while the log played")
@@ -259,7 +229,7 @@ class LiveLoopReplay(unittest.TestCase):
         self.assertEqual(grid.header.frame_id, "map")
 
         # Loops close, and each moves map -> odom far more than a scan does.
-        self.assertGreater(self.loops_accepted, 0)
+        self.assertGreater(self.diagnostics.count("loops accepted"), 0)
         self.assertGreater(len(self.loop_paths), 0)
         steps, after = self.corrections()
         at_loops = [steps[t] for t in self.loop_paths if t in steps]
@@ -288,13 +258,15 @@ class LiveLoopReplay(unittest.TestCase):
         scans = sum(1 for s in stamps if s <= last + 1e-6)
         scan_rate = (scans - 1) / max(1e-9, last - stamps[0])  # scans per second of log
         live = {round(p[0], 6): p for p in self.poses}
+        received = self.diagnostics.count("scans received")
+        drops = self.diagnostics.drops()
         # Scans the node dropped (a loaded machine lets it fall behind the
         # transforms it buffers) are left out of the comparison, not
         # compared with an offline run that used them; most must be there.
         print("the node received %d and published poses for %d of the log's %d scans up to %.3f;"
-              " dropped: %s" % (self.received, len(live), scans, last, self.drops or "none"))
+              " dropped: %s" % (received, len(live), scans, last, drops or "none"))
         self.assertGreater(len(live), 0.9 * scans, "the node dropped scans: %s, received %d" %
-                           (self.drops, self.received))
+                           (drops, received))
         offline = self.offline(live)
         compared = worst_position = worst_heading = 0.0
         outside = 0
@@ -336,12 +308,6 @@ class LiveLoopReplay(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=1000.0)
-    parser.add_argument("--rate", type=float, default=10.0)
-    parser.add_argument("--correction-delay", type=int, default=-1)
-    args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
-    LiveLoopReplay.args = args
-    rospy.init_node("live_loop_replay_test")
-    rostest.rosrun("ekf_slam", "live_loop_replay", LiveLoopReplay)
+    main(LiveLoopReplay, "live_loop_replay", seconds=1000.0, rate=10.0,
+         add_arguments=lambda parser: parser.add_argument("--correction-delay", type=int,
+                                                          default=-1))

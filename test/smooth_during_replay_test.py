@@ -14,43 +14,32 @@ Checks:
 - every scan the log played was received, and got a pose or a counted drop
   (or still waits for its transforms when the log ends).
 """
-import argparse
-import os
-import subprocess
-import sys
 import threading
 import time
-import unittest
 
-import rosbag
 import rospy
-import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Path
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
+
+from ekf_slam_tools.replay_test import ReplayTest, main
 
 MAX_PAUSE = 0.3  # s (wall) between two map -> odom messages while ~smooth runs
 CALLS = 3
 FIRST_CALL_AFTER = 2500  # poses published before the first call (a long history)
 
 
-class SmoothDuringReplay(unittest.TestCase):
-    args = None
-
+class SmoothDuringReplay(ReplayTest):
     def setUp(self):
-        if not os.path.exists(self.args.bag):
-            self.skipTest(self.args.bag + " not found (the datasets live in ../shared/datasets)")
+        super().setUp()
         self.lock = threading.Lock()
         self.pose_stamps = set()
         self.map_to_odom_wall = []  # wall time of each map -> odom on /tf
         self.smoothed_paths = []  # pose counts of smoothed_path messages
-        self.diagnostics = {}  # the last value of each key
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
         rospy.Subscriber("smoothed_path", Path, self.on_smoothed_path, queue_size=10)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=100)
 
     def on_pose(self, msg):
         with self.lock:
@@ -67,31 +56,14 @@ class SmoothDuringReplay(unittest.TestCase):
         with self.lock:
             self.smoothed_paths.append(len(msg.poses))
 
-    def on_diagnostics(self, msg):
-        with self.lock:
-            for status in msg.status:
-                for kv in status.values:
-                    self.diagnostics[kv.key] = kv.value
-
     def poses(self):
         with self.lock:
             return len(self.pose_stamps)
 
-    def played_scans(self):
-        """The scans `rosbag play -u seconds` plays: bag time before start + seconds."""
-        with rosbag.Bag(self.args.bag) as bag:
-            end = bag.get_start_time() + self.args.seconds
-            return sum(1 for _, _, t in bag.read_messages(topics=["/scan"]) if t.to_sec() <= end)
-
     def test_map_to_odom_flows_while_smoothing(self):
-        deadline = time.time() + 30.0
-        while rospy.get_param("/use_sim_time", False) is not True and time.time() < deadline:
-            time.sleep(0.1)
-        rospy.wait_for_service("ekf_slam/smooth", timeout=60.0)
+        self.wait_for_node("ekf_slam/smooth")
         smooth = rospy.ServiceProxy("ekf_slam/smooth", Trigger)
-        player = subprocess.Popen(["rosbag", "play", "--clock", "--quiet", "-r",
-                                   str(self.args.rate), "-u", str(self.args.seconds),
-                                   self.args.bag])
+        player = self.player()
         calls = []  # (start, end, response)
         try:
             deadline = time.time() + 120.0
@@ -105,11 +77,7 @@ class SmoothDuringReplay(unittest.TestCase):
                 time.sleep(1.0)
         finally:
             player.wait()
-        # The node finishes its queue.
-        last = -1
-        while self.poses() != last:
-            last = self.poses()
-            time.sleep(2.0)
+        self.settle(self.poses)  # the node finishes its queue
         time.sleep(2.0)  # one more /diagnostics
 
         self.assertEqual(len(calls), CALLS, "the log ended before %d calls" % CALLS)
@@ -133,11 +101,9 @@ class SmoothDuringReplay(unittest.TestCase):
 
         # Every scan answered or counted.
         played = self.played_scans()
-        d = self.diagnostics
-        received = int(d["scans received"])
-        waiting = int(d["scans waiting for transforms"])
-        drops = {k[len("dropped: "):]: int(v) for k, v in d.items()
-                 if k.startswith("dropped: ") and int(v) > 0}
+        received = self.diagnostics.count("scans received")
+        waiting = self.diagnostics.count("scans waiting for transforms")
+        drops = self.diagnostics.drops()
         print("played %d scans; received %d; poses %d; dropped %s; waiting %d" %
               (played, received, self.poses(), drops or "none", waiting))
         self.assertEqual(received, played)
@@ -145,11 +111,4 @@ class SmoothDuringReplay(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bag", required=True)
-    parser.add_argument("--seconds", type=float, default=700.0)
-    parser.add_argument("--rate", type=float, default=20.0)
-    args, _ = parser.parse_known_args(rospy.myargv(sys.argv)[1:])
-    SmoothDuringReplay.args = args
-    rospy.init_node("smooth_during_replay_test")
-    rostest.rosrun("ekf_slam", "smooth_during_replay", SmoothDuringReplay)
+    main(SmoothDuringReplay, "smooth_during_replay", seconds=800.0, rate=20.0)

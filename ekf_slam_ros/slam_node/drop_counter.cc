@@ -22,6 +22,8 @@ const char* toString(DropReason reason) {
       return "laser transform missing";
     case DropReason::kQueueOverflow:
       return "queue overflow";
+    case DropReason::kSubscriberQueueFull:
+      return "subscriber queue full";
     case DropReason::kPaused:
       return "paused";
     case DropReason::kBadFeatures:

@@ -21,16 +21,23 @@ enum class DropReason {
                            // while scan_queue_size newer scans arrived
   kLaserTransformMissing,  // base_link → laser not available at the stamp within tf_timeout
   kQueueOverflow,          // more scans waiting for tf than scan_queue_size
+  kSubscriberQueueFull,    // more than subscriber_queue_size arrived before the node took them
   kPaused,                 // the pause service was called
   kBadFeatures,            // a features message with unknown kinds or unusable values
   kLaserUpsideDown,        // features (input: features) from a laser mounted upside down
 };
 constexpr DropReason kAllDropReasons[] = {
-    DropReason::kStampNotIncreasing,   DropReason::kStampInFuture,
-    DropReason::kTooFewValidReadings,  DropReason::kBadScanGeometry,
-    DropReason::kOdomTransformMissing, DropReason::kLaserTransformMissing,
-    DropReason::kQueueOverflow,        DropReason::kPaused,
-    DropReason::kBadFeatures,          DropReason::kLaserUpsideDown,
+    DropReason::kStampNotIncreasing,
+    DropReason::kStampInFuture,
+    DropReason::kTooFewValidReadings,
+    DropReason::kBadScanGeometry,
+    DropReason::kOdomTransformMissing,
+    DropReason::kLaserTransformMissing,
+    DropReason::kQueueOverflow,
+    DropReason::kSubscriberQueueFull,
+    DropReason::kPaused,
+    DropReason::kBadFeatures,
+    DropReason::kLaserUpsideDown,
 };
 const char* toString(DropReason reason);
 

@@ -45,22 +45,38 @@ std::string GuardedTfListener::check(const geometry_msgs::TransformStamped& t, c
   const ros::Time reference = std::max(now, last);
   if (!is_static && !reference.isZero() && (t.header.stamp - reference).toSec() > max_future) {
     why << t.header.frame_id << " -> " << t.child_frame_id << " stamped " << t.header.stamp.toSec()
-        << ", " << (t.header.stamp - now).toSec() << " s ahead of the clock " << now.toSec()
-        << " and " << (t.header.stamp - last).toSec() << " s after the last accepted one "
-        << "(max_future_stamp " << max_future << " s)";
+        << ", " << (t.header.stamp - now).toSec() << " s ahead of the clock and the scans "
+        << now.toSec() << " and " << (t.header.stamp - last).toSec()
+        << " s after the last accepted one "
+        << "(max_future_stamp × the clock's rate: " << max_future << " s)";
     if (future != nullptr) *future = true;
     return why.str();
   }
   return "";
 }
 
+ros::Time GuardedTfListener::newestReceived(const std::string& parent,
+                                            const std::string& child) const {
+  const std::lock_guard<std::mutex> lock(received_mutex_);
+  const auto found = last_received_.find({parent, child});
+  return found == last_received_.end() ? ros::Time() : found->second;
+}
+
 void GuardedTfListener::onMessage(const tf2_msgs::TFMessage::ConstPtr& message, bool is_static) {
-  const ros::Time now = ros::Time::now();
+  ros::Time now = ros::Time::now();
+  ros::Time newest_input;
+  newest_input.fromNSec(newest_input_ns_.load());
+  if (newest_input > now) now = newest_input;
   const std::string authority = "guarded listener";
   for (const geometry_msgs::TransformStamped& transform : message->transforms) {
+    if (!is_static) {
+      const std::lock_guard<std::mutex> lock(received_mutex_);
+      ros::Time& received = last_received_[{transform.header.frame_id, transform.child_frame_id}];
+      received = std::max(received, transform.header.stamp);
+    }
     ros::Time& last = last_accepted_[{transform.header.frame_id, transform.child_frame_id}];
     bool future = false;
-    const std::string problem = check(transform, now, last, max_future_, is_static, &future);
+    const std::string problem = check(transform, now, last, futureTolerance(), is_static, &future);
     if (problem.empty()) {
       if (!is_static) last = std::max(last, transform.header.stamp);
       try {

@@ -6,22 +6,27 @@
 // corrupt header) therefore makes every later, correct transform "old
 // data": the odometry is lost for 11 days. This listener is
 // tf2_ros::TransformListener with a gate in front of the buffer: a
-// transform on /tf stamped more than `max_future` seconds ahead of both the
-// node's clock (ros::Time::now(), sim time included) and the last
-// transform accepted for the same frame pair, or with a non-finite or
-// non-unit rotation, is refused, counted and logged (throttled) with its
-// frames and stamp. The frame pair's own history matters under sim time:
-// the clock advances only when the node's main thread takes its /clock
-// messages, so while a scan is being processed a bag replayed at 10× lets
-// the clock fall a second behind a transform stream that is perfectly
-// continuous. /tf_static is time-independent and passes the finite-value
-// check only.
+// transform on /tf stamped more than `max_future` seconds ahead of the
+// node's clock (ros::Time::now(), sim time included; `max_future` scaled
+// by the clock's rate against the wall clock, ClockRate), of the last
+// transform accepted for the same frame pair and of the newest scan the
+// node received (noteInputStamp), or with a non-finite or non-unit
+// rotation, is refused, counted and logged (throttled) with its frames and
+// stamp. The data's own time matters under sim time: on a loaded machine,
+// or while a scan is being processed, a bag replayed fast lets the clock
+// fall seconds behind transform and scan streams that are perfectly
+// continuous; a stamp the other stream has reached is not in the future
+// (the scans are checked against the odometry the same way, see
+// newestReceived). /tf_static is time-independent and passes the
+// finite-value check only.
 #pragma once
 
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
+
+#include "ekf_slam_ros/slam_node/clock_rate.h"
 
 #include <atomic>
 #include <map>
@@ -53,10 +58,27 @@ class GuardedTfListener {
     f();
   }
 
+  // The newest scan (or features) stamp the node received: a reference
+  // for the future check. Any thread.
+  void noteInputStamp(const ros::Time& stamp) {
+    uint64_t ns = stamp.toNSec();
+    uint64_t seen = newest_input_ns_.load();
+    while (ns > seen && !newest_input_ns_.compare_exchange_weak(seen, ns)) {
+    }
+  }
+  // The newest stamp received for parent → child, accepted or refused
+  // (zero: none). Any thread.
+  ros::Time newestReceived(const std::string& parent, const std::string& child) const;
+
+  // s a stamp may lie ahead of its references: max_future scaled by the
+  // clock's rate (ClockRate). Any thread.
+  double futureTolerance() const { return max_future_ * clock_rate_.rate(); }
+
   long refusedFuture() const { return refused_future_; }
   long refusedInvalid() const { return refused_invalid_; }
 
-  // Empty when the transform may enter a buffer at clock time `now`, when
+  // Empty when the transform may enter a buffer at time `now` (the clock or
+  // the newest scan, the later), when
   // the last transform accepted for its frame pair was stamped `last` (zero:
   // none yet), else why not (names the frames and the stamp). The future
   // check is against the later of the two, and skipped while both are zero.
@@ -79,6 +101,10 @@ class GuardedTfListener {
   std::mutex insertion_mutex_;  // held while a transform enters the buffer
   // Newest accepted stamp per (parent, child); used on the listener's thread only.
   std::map<std::pair<std::string, std::string>, ros::Time> last_accepted_;
+  std::atomic<uint64_t> newest_input_ns_{0};
+  mutable ClockRate clock_rate_;
+  mutable std::mutex received_mutex_;
+  std::map<std::pair<std::string, std::string>, ros::Time> last_received_;
 };
 
 }  // namespace ekf_slam

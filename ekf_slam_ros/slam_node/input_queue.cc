@@ -35,8 +35,9 @@ InputQueue::InputQueue(ros::NodeHandle node, const SlamNodeParams& params,
         [this](const Features::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
           onTransformsFailed(m.get(), reason);
         });
-    subscriber_ = node.subscribe(params_.features_topic, params_.subscriber_queue_size,
-                                 &InputQueue::onFeatures, this);
+    features_subscriber_ = std::make_unique<WatchedSubscriber<Features>>(
+        node, params_.features_topic, params_.subscriber_queue_size,
+        [this](const Features::ConstPtr& m) { onFeatures(m); }, [this](long n) { onDiscarded(n); });
   } else {
     scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
         transforms_.buffer(), params_.odom_frame, queue_size, node);
@@ -46,13 +47,29 @@ InputQueue::InputQueue(ros::NodeHandle node, const SlamNodeParams& params,
         [this](const sensor_msgs::LaserScan::ConstPtr& m, tf2_ros::FilterFailureReason reason) {
           onTransformsFailed(m.get(), reason);
         });
-    subscriber_ = node.subscribe(params_.scan_topic, params_.subscriber_queue_size,
-                                 &InputQueue::onScan, this);
+    scan_subscriber_ = std::make_unique<WatchedSubscriber<sensor_msgs::LaserScan>>(
+        node, params_.scan_topic, params_.subscriber_queue_size,
+        [this](const sensor_msgs::LaserScan::ConstPtr& m) { onScan(m); },
+        [this](long n) { onDiscarded(n); });
   }
   // Inputs waiting for a missing transform are given up after tf_timeout
   // even when no new scan arrives (e.g. the laser stops).
   drain_timer_ = node.createTimer(ros::Duration(std::max(0.01, params_.tf_timeout / 4.0)),
                                   [this](const ros::TimerEvent&) { expireWaiting(); });
+}
+
+std::string InputQueue::topic() const {
+  return scan_subscriber_ ? scan_subscriber_->topic() : features_subscriber_->topic();
+}
+
+void InputQueue::onDiscarded(long count) {
+  received_ += count;
+  for (long i = 0; i < count; ++i) {
+    std::ostringstream detail = detailStream();
+    detail << "an input on " << topic() << " discarded unseen: " << params_.subscriber_queue_size
+           << " newer ones arrived while the node was busy (subscriber_queue_size)";
+    drops_.drop(DropReason::kSubscriberQueueFull, detail.str());
+  }
 }
 
 bool InputQueue::accepting() {
@@ -114,8 +131,8 @@ void InputQueue::onFeatures(const Features::ConstPtr& message) {
   if (fromFeaturesMessage(*message, &features, &error)) error = validateFeatureSet(features);
   if (!error.empty()) {
     std::ostringstream detail = detailStream();
-    detail << "features at " << message->header.stamp.toSec() << " on " << subscriber_.getTopic()
-           << ": " << error << "; the map is not touched";
+    detail << "features at " << message->header.stamp.toSec() << " on " << topic() << ": " << error
+           << "; the map is not touched";
     drops_.drop(DropReason::kBadFeatures, detail.str());
     return;
   }
@@ -126,15 +143,20 @@ void InputQueue::onFeatures(const Features::ConstPtr& message) {
 
 void InputQueue::enqueue(PendingInput pending, const std::function<void()>& add) {
   const ros::Time stamp = pending.header.stamp;
-  // A stamp far ahead of the clock (a driver's clock jump, a corrupt
-  // header) must never become the reference later scans are compared
-  // with: it would stop mapping until the clock caught up.
-  const ros::Time now = ros::Time::now();
-  if (!now.isZero() && (stamp - now).toSec() > params_.max_future_stamp) {
+  // A stamp far ahead of the clock and of the odometry (a driver's clock
+  // jump, a corrupt header) must never become the reference later scans
+  // are compared with: it would stop mapping until the clock caught up.
+  // The odometry's check takes the scans as its reference in turn, so that
+  // two streams ahead of a lagging clock confirm each other.
+  transforms_.noteInputStamp(stamp);
+  const ros::Time reached = transforms_.dataTime(params_.odom_frame, params_.base_frame);
+  const double tolerance = transforms_.futureTolerance();
+  if (!reached.isZero() && (stamp - reached).toSec() > tolerance) {
     std::ostringstream detail = detailStream();
-    detail << "scan stamp " << stamp.toSec() << " is " << (stamp - now).toSec()
-           << " s ahead of the clock " << now.toSec() << " (max_future_stamp "
-           << params_.max_future_stamp << " s); the map is not touched";
+    detail << "scan stamp " << stamp.toSec() << " is " << (stamp - reached).toSec()
+           << " s ahead of the clock and the odometry (" << reached.toSec()
+           << "; max_future_stamp × the clock's rate: " << tolerance
+           << " s); the map is not touched";
     drops_.drop(DropReason::kStampInFuture, detail.str());
     return;
   }

@@ -12,7 +12,8 @@
 // first, so that the map is not (features from one are dropped: their
 // extractor saw the mirrored world).
 //
-// Owns the input subscriber, both message filters, the waiting queue and
+// Owns the input subscriber (a WatchedSubscriber: every input discarded
+// before the node took it is counted), both message filters, the waiting queue and
 // the clock checks; counts every drop in the DropCounter it is given.
 #pragma once
 
@@ -33,6 +34,7 @@
 #include "ekf_slam_ros/slam_node/drop_counter.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 #include "ekf_slam_ros/slam_node/transform_source.h"
+#include "ekf_slam_ros/slam_node/watched_subscriber.h"
 #include "ros_conversions/pose_conversion.h"
 
 namespace ekf_slam {
@@ -75,11 +77,13 @@ class InputQueue {
   long received() const { return received_; }
   // Inputs waiting for their transforms now.
   long waiting() const { return static_cast<long>(waiting_.size()); }
-  std::string topic() const { return subscriber_.getTopic(); }
+  std::string topic() const;
 
  private:
   void onScan(const sensor_msgs::LaserScan::ConstPtr& message);
   void onFeatures(const Features::ConstPtr& message);
+  // `count` inputs the subscriber discarded before the node took them.
+  void onDiscarded(long count);
   // Common to both inputs: the clock and pause checks (false: dropped).
   bool accepting();
   // Hands a checked input to its message filter (`add`: the filter's add
@@ -101,7 +105,9 @@ class InputQueue {
   TransformSource& transforms_;
   DropCounter& drops_;
   Hooks hooks_;
-  ros::Subscriber subscriber_;
+  // One of the two, by params.input.
+  std::unique_ptr<WatchedSubscriber<sensor_msgs::LaserScan>> scan_subscriber_;
+  std::unique_ptr<WatchedSubscriber<Features>> features_subscriber_;
   // Inputs wait for their transforms in a tf2_ros::MessageFilter (target
   // odom_frame, so that both odom → base_link and base_link → laser must
   // exist at the stamp); `waiting_` holds what the node knows of each, in

@@ -23,7 +23,7 @@ void MapToOdomBroadcaster::publish(const ros::Time& data_stamp, bool new_estimat
   // Each stamp once (tf2 listeners warn about repeated data); stamped with
   // data time, future-dated by transform_tolerance so that consumers can
   // look up map → base_link until the next update (as amcl and gmapping do).
-  if (!have_estimate_) return;
+  if (!have_estimate_ || !params_.publish_tf) return;
   ros::Time stamp = data_stamp;
   if (stamp <= last_stamp_) {
     // The timer has already re-sent the previous estimate stamped with

@@ -3,7 +3,7 @@
 // processed scan, and re-sent between scans by a timer (tf_publish_rate)
 // stamped with the newest odom → base_link, so that map → base_link stays
 // available at the odometry's rate. Each stamp goes out once, future-dated
-// by transform_tolerance.
+// by transform_tolerance. Nothing is sent with publish_tf false.
 //
 // Owns the broadcaster, the timer and the estimate last sent.
 #pragma once

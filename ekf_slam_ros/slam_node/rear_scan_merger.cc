@@ -32,14 +32,16 @@ std::string RearScanMerger::refusal(const RearScan& rear, const sensor_msgs::Las
   problem.precision(3);
   std::string geometry = ros_conversions::rangeCountError(message);
   if (geometry.empty()) geometry = validateScan(rear.scan);
-  const ros::Time now = ros::Time::now();
+  const ros::Time reached = transforms_.dataTime(params_.odom_frame, params_.base_frame);
+  const double tolerance = transforms_.futureTolerance();
   if (!geometry.empty()) {
     problem << geometry;
   } else if (rear.frame_id.empty()) {
     problem << "it has no frame_id";
-  } else if (!now.isZero() && (rear.stamp - now).toSec() > params_.max_future_stamp) {
-    problem << "its stamp is " << (rear.stamp - now).toSec() << " s ahead of the clock "
-            << now.toSec() << " (max_future_stamp " << params_.max_future_stamp << " s)";
+  } else if (!reached.isZero() && (rear.stamp - reached).toSec() > tolerance) {
+    problem << "its stamp is " << (rear.stamp - reached).toSec()
+            << " s ahead of the clock and the odometry (" << reached.toSec()
+            << "; max_future_stamp × the clock's rate: " << tolerance << " s)";
   } else if (!rear_scans_.empty() && !(rear.stamp > rear_scans_.back().stamp)) {
     const double back = (rear_scans_.back().stamp - rear.stamp).toSec();
     if (back > 1.0) {

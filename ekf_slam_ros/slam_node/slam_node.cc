@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "ekf_slam_core/io/map_set.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
 
 namespace ekf_slam {
@@ -12,8 +13,9 @@ namespace {
 // The landmark map named by initial_map, if any (a bad file stops the node).
 std::optional<LandmarkMapFile> initialMap(const SlamNodeParams& params) {
   if (params.initial_map.empty()) return std::nullopt;
+  std::string error = finishInterruptedMapSave(params.initial_map);
   LandmarkMapFile map;
-  const std::string error = readLandmarkMap(params.initial_map, &map);
+  if (error.empty()) error = readLandmarkMap(params.initial_map, &map);
   if (!error.empty()) throw std::runtime_error("initial_map: " + error);
   ROS_INFO("ekf_slam_node: %zu landmarks from %s%s", map.landmarks.size(),
            params.initial_map.c_str(), params.localize_only ? " (localisation only)" : "");

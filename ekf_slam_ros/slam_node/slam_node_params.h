@@ -41,8 +41,8 @@ struct SlamNodeParams {
   std::string features_topic = "features";
   double tf_timeout = 0.3;   // s a scan may wait for its transforms
   int scan_queue_size = 30;  // scans waiting for tf at most (oldest dropped)
-  // Inputs the subscription holds while the node is busy; ROS drops the
-  // oldest beyond it before the node sees them, so it is ample.
+  // Inputs the subscription holds while the node is busy (beyond it the
+  // oldest is discarded and counted), so it is ample.
   int subscriber_queue_size = 1000;
   double tf_cache_time = 10.0;  // s of transforms buffered (tf2's default)
   // When the clock jumps back (a bag replayed again, or looped with -l):
@@ -50,6 +50,9 @@ struct SlamNodeParams {
   // "continue" keeps the map as the prior of a filter restarted at the
   // initial pose, where a replayed log starts again.
   std::string clock_jump = "new_map";
+  // false: map → odom is not sent (another node, a localiser say, owns it);
+  // poses, maps and services are unchanged.
+  bool publish_tf = true;
   double transform_tolerance = 0.1;    // s map→odom is future-dated by
   double tf_publish_rate = 20.0;       // Hz, map→odom re-publication
   int min_valid_readings = 10;         // fewer usable ranges: the scan is rejected
@@ -98,6 +101,7 @@ struct SlamNodeParams {
     v.integer("subscriber_queue_size", subscriber_queue_size,
               Bounds::closed(1, 100000, "messages"));
     v.number("tf_cache_time", tf_cache_time, Bounds::closed(1.0, 3600.0, "s"));
+    v.flag("publish_tf", publish_tf);
     v.number("transform_tolerance", transform_tolerance, Bounds::closed(0.0, 10.0, "s"));
     v.number("tf_publish_rate", tf_publish_rate, Bounds::closed(0.1, 1000.0, "Hz"));
     v.integer("min_valid_readings", min_valid_readings, Bounds::closed(2, 100000, "readings"));

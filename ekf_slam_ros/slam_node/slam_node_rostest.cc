@@ -19,6 +19,7 @@
 #include <ekf_slam/SaveMap.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/GetMap.h>
 #include <nav_msgs/MapMetaData.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
@@ -60,7 +61,7 @@ class Robot {
     room_.addBox(Vector2(2.5, 1.5), 0.6, 0.4, 0.3);
     room_.addBox(Vector2(-2.5, -1.0), 0.5, 0.5);
     room_.addBox(Vector2(0.5, -2.2), 0.8, 0.3);
-    scans_ = node_.advertise<sensor_msgs::LaserScan>("scan", 10);
+    scans_ = node_.advertise<sensor_msgs::LaserScan>("scan", 1000);
     rear_scans_ = node_.advertise<sensor_msgs::LaserScan>("scan_rear", 10);
   }
   ~Robot() { stop(); }
@@ -597,6 +598,37 @@ TEST_F(SlamNodeTest, BadInputIsCountedLoggedAndLeavesTheMapUnchanged) {
   EXPECT_GT(observer_.maps(), maps_before);
 }
 
+// A burst of scans, far more than the node's subscriber queue holds
+// (subscriber_queue_size 3 in slam_node_tf_cache.test): those the node had
+// no time to take are discarded and counted, none is lost uncounted.
+TEST_F(SlamNodeTest, ABurstBeyondTheSubscriberQueueIsCounted) {
+  int capacity = 1000;
+  ros::param::get(std::string(kNode) + "/subscriber_queue_size", capacity);
+  if (capacity > 10) GTEST_SKIP() << "subscriber_queue_size " << capacity << ": no burst fills it";
+  robot_.publish_scans = false;
+  ros::WallDuration(0.5).sleep();  // queued scans processed
+  ASSERT_TRUE(freshDiagnostics());
+  const double received_before = observer_.diagnostic("scans received");
+  const double full_before = observer_.diagnostic("dropped: subscriber queue full");
+  ASSERT_FALSE(std::isnan(full_before));
+  const int kBurst = 300;
+  const ros::Time first = ros::Time::now();
+  for (int i = 0; i < kBurst; ++i) {
+    robot_.publishScan(first + ros::Duration(0.0001 * i), [](std::vector<float>*) {});
+  }
+  EXPECT_TRUE(waitFor(
+      [&] { return observer_.diagnostic("scans received") >= received_before + kBurst; }, 5.0));
+  ros::WallDuration(1.5).sleep();  // nothing more arrives
+  ASSERT_TRUE(freshDiagnostics());
+  EXPECT_EQ(observer_.diagnostic("scans received"), received_before + kBurst);
+  EXPECT_GT(observer_.diagnostic("dropped: subscriber queue full"), full_before);
+  EXPECT_TRUE(observer_.logged("subscriber queue full", "subscriber_queue_size"))
+      << "the log must name the parameter";
+  robot_.publish_scans = true;
+  const ros::Time resumed = ros::Time::now();
+  EXPECT_TRUE(waitFor([&] { return observer_.lastPoseStamp() > resumed; }, 5.0));
+}
+
 // One odom → base_link stamped 10⁶ s ahead among the normal ones. tf2's
 // buffer would keep it as the newest transform and refuse every later one as
 // old data, losing the odometry for 11 days; the node's listener refuses it
@@ -981,6 +1013,11 @@ TEST_F(SlamNodeTest, SavedGridReloadsAndInitialPoseRelocalises) {
   ASSERT_TRUE(waitFor([&] { return observer_.grids() > grids_at_load; }, 5.0));
   EXPECT_TRUE(sameGrid(observer_.grid(), file)) << "the loaded grid differs from the saved one";
   expectMetadataOfTheShownGrid();  // the loaded grid
+  // dynamic_map answers with the grid on map.
+  nav_msgs::GetMap get_map;
+  ASSERT_TRUE(ros::service::call("/dynamic_map", get_map));
+  EXPECT_TRUE(sameGrid(get_map.response.map, file)) << "dynamic_map differs from map";
+  EXPECT_EQ(get_map.response.map.header.frame_id, "map");
   ASSERT_TRUE(trigger("resume"));
   ros::WallDuration(2.0).sleep();
   auto errorNow = [&](double* heading_error) {

@@ -17,7 +17,7 @@
 #include <utility>
 
 #include "ekf_slam_core/io/atomic_file.h"
-#include "ekf_slam_core/io/grid_map_file.h"
+#include "ekf_slam_core/io/map_set.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/slam_node/spin_thread.h"
 #include "ros_conversions/pose_conversion.h"
@@ -27,17 +27,6 @@ namespace {
 
 using ros_conversions::fromPoseMessage;
 using ros_conversions::toPoseMessage;
-
-// The occupancy grid saved beside a landmark map: "office.yaml" →
-// "office_grid.yaml" (+ "office_grid.pgm").
-std::string gridPathFor(const std::string& landmark_path) {
-  const std::string suffix = ".yaml";
-  const bool yaml =
-      landmark_path.size() > suffix.size() &&
-      landmark_path.compare(landmark_path.size() - suffix.size(), suffix.size(), suffix) == 0;
-  return (yaml ? landmark_path.substr(0, landmark_path.size() - suffix.size()) : landmark_path) +
-         "_grid.yaml";
-}
 
 // "12 landmarks (lines: 3, line angles: 2)", for the services' replies.
 std::string landmarkCounts(const LandmarkMapFile& map) {
@@ -162,6 +151,10 @@ SlamServices::SlamServices(ros::NodeHandle node, ros::NodeHandle private_node,
   services_.push_back(slow.advertiseService("smooth", &SlamServices::onSmooth, this));
   services_.push_back(slow.advertiseService("save_map", &SlamServices::onSaveMap, this));
   services_.push_back(slow.advertiseService("load_map", &SlamServices::onLoadMap, this));
+  ros::NodeHandle slow_public(node);
+  slow_public.setCallbackQueue(&slow_queue_);
+  services_.push_back(
+      slow_public.advertiseService("dynamic_map", &SlamServices::onDynamicMap, this));
   initial_pose_subscriber_ = node.subscribe("initialpose", 2, &SlamServices::onInitialPose, this);
   slow_thread_ = std::make_unique<ros::AsyncSpinner>(1, &slow_queue_);
   slow_thread_->start();
@@ -251,16 +244,17 @@ bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
     response.message = "path is empty";
     return true;
   }
+  auto refuse = [&response](const std::string& problem) {
+    response.message = problem + " (nothing saved)";
+    ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
+    return true;
+  };
   // A path that is not a regular file (a directory, a device, a pipe) is
-  // refused before any file is written.
-  const std::string grid_path = gridPathFor(request.path);
-  for (const std::string& path : {request.path, grid_path, imagePathFor(grid_path)}) {
+  // refused before the map is copied (writeMapSet checks them again).
+  const MapSetPaths paths = mapSetPaths(request.path);
+  for (const std::string& path : {paths.landmarks, paths.grid, paths.image}) {
     const std::string problem = writeTargetProblem(path);
-    if (!problem.empty()) {
-      response.message = problem + " (nothing saved)";
-      ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
-      return true;
-    }
+    if (!problem.empty()) return refuse(problem);
   }
   // The map as it stands now, copied on the spin thread; written here.
   LandmarkMapFile map;
@@ -278,30 +272,31 @@ bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
     response.message = kShuttingDown;
     return true;
   }
-  // The grid first: a failure leaves the landmark file as it was. Each file
-  // is replaced atomically; a map saved without a grid drops the grid an
-  // earlier save left at that path, so that a load never pairs the two.
-  std::string grid_note;
-  if (have_grid) {
-    const std::string error = writeGridMap(grid_path, ros_conversions::toGridMapFile(grid));
-    if (!error.empty()) {
-      response.message = error + " (nothing saved)";
-      ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
-      return true;
-    }
-    response.grid_path = grid_path;
-    grid_note = " and the " + std::to_string(grid.info.width) + " x " +
-                std::to_string(grid.info.height) + " occupancy grid to " + grid_path;
-  } else {
-    std::remove(grid_path.c_str());
-    grid_note = "; no occupancy grid yet (nothing published on map)";
-  }
-  const std::string error = writeLandmarkMap(request.path, map);
+  // The landmarks, the grid's image and its YAML as one set: a load never
+  // pairs files of two saves. A map saved without a grid removes the grid
+  // an earlier save left at that path.
+  std::optional<GridMapFile> grid_file;
+  if (have_grid) grid_file = ros_conversions::toGridMapFile(grid);
+  const std::string error = writeMapSet(request.path, map, grid_file);
+  const std::string grid_note = have_grid ? " and the " + std::to_string(grid.info.width) + " x " +
+                                                std::to_string(grid.info.height) +
+                                                " occupancy grid to " + paths.grid
+                                          : "; no occupancy grid yet (nothing published on map)";
   response.success = error.empty();
+  if (response.success && have_grid) response.grid_path = paths.grid;
   response.message =
       error.empty() ? landmarkCounts(map) + " written to " + request.path + grid_note : error;
   ROS_INFO("ekf_slam_node: save_map: %s", response.message.c_str());
   return true;
+}
+
+bool SlamServices::onDynamicMap(nav_msgs::GetMap::Request&, nav_msgs::GetMap::Response& response) {
+  bool have_grid = false;
+  if (!onSpinThread([&] { have_grid = grids_.currentGrid(&response.map); })) return false;
+  if (!have_grid) {
+    ROS_WARN_THROTTLE(5.0, "ekf_slam_node: dynamic_map: no grid published on map yet");
+  }
+  return have_grid;
 }
 
 bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
@@ -312,12 +307,15 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
     ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
     return true;
   };
-  // The files are read here, off the spin thread.
+  // The files are read here, off the spin thread, after a save of them
+  // that stopped after its commit has been completed.
+  const std::string grid_path = mapSetPaths(request.path).grid;
+  std::string error = finishInterruptedMapSave(request.path);
+  if (!error.empty()) return refuse(error);
   LandmarkMapFile map;
-  std::string error = readLandmarkMap(request.path, &map);
+  error = readLandmarkMap(request.path, &map);
   if (!error.empty()) return refuse(error);
   // The grid saved beside it, if there is one: a broken one refuses the load.
-  const std::string grid_path = gridPathFor(request.path);
   std::optional<GridMapFile> grid;
   if (::access(grid_path.c_str(), F_OK) == 0) {
     grid.emplace();

@@ -18,6 +18,7 @@
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <nav_msgs/GetMap.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <ros/spinner.h>
@@ -72,6 +73,9 @@ class SlamServices {
   bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
   bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
+  // dynamic_map (nav_msgs/GetMap, as gmapping and slam_toolbox offer it):
+  // the grid last published on `map`; fails while there is none.
+  bool onDynamicMap(nav_msgs::GetMap::Request&, nav_msgs::GetMap::Response& response);
   // The filter restarts at the given pose, the current landmarks (or the
   // loaded map) as its prior.
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped& message);

@@ -2,6 +2,8 @@
 
 #include <tf2/exceptions.h>
 
+#include <algorithm>
+
 #include <sstream>
 
 #include "ros_conversions/pose_conversion.h"
@@ -18,6 +20,12 @@ std::optional<ros::Time> TransformSource::latestStamp(const std::string& target,
   } catch (const tf2::TransformException&) {
     return std::nullopt;
   }
+}
+
+ros::Time TransformSource::dataTime(const std::string& target, const std::string& source) const {
+  ros::Time reached = std::max(ros::Time::now(), listener_.newestReceived(target, source));
+  const std::optional<ros::Time> latest = latestStamp(target, source);  // a chain of frames
+  return latest && *latest > reached ? *latest : reached;
 }
 
 bool TransformSource::lookup(const std::string& target, const std::string& source,

@@ -32,6 +32,17 @@ class TransformSource {
                    ros_conversions::LaserMount* mount, std::string* why) const;
   // The stamp of the newest target → source, if there is one.
   std::optional<ros::Time> latestStamp(const std::string& target, const std::string& source) const;
+  // How far the data has come: the clock, or the newest target → source
+  // (the odometry) received where that is ahead. The reference of the
+  // scans' future-stamp rule: on a loaded machine the simulated clock lags
+  // the log it comes from, and a stamp the odometry has reached is not in
+  // the future.
+  ros::Time dataTime(const std::string& target, const std::string& source) const;
+  // s a stamp may lie ahead of dataTime(): max_future scaled by the clock's
+  // rate against the wall clock (1 in real time, r for an r× replay).
+  double futureTolerance() const { return listener_.futureTolerance(); }
+  // The newest input stamp received, for the transforms' future-stamp rule.
+  void noteInputStamp(const ros::Time& stamp) { listener_.noteInputStamp(stamp); }
 
   // For the message filters that wait on it.
   tf2_ros::Buffer& buffer() { return buffer_; }
