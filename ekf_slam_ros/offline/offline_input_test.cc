@@ -5,6 +5,7 @@
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sys/mount.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <tf2_msgs/TFMessage.h>
@@ -12,9 +13,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -549,6 +553,38 @@ TEST_F(OfflineRunner, AnOutputThatCannotBeWrittenExitsNonZeroNamingIt) {
   ASSERT_EQ(::mkdir((out_ + "/report.txt").c_str(), 0755), 0);
   EXPECT_EQ(run("--bag", &message), 3);
   EXPECT_NE(message.find("report.txt: is a directory"), std::string::npos) << message;
+}
+
+// A disk that fills exactly at the report: the run's other outputs fit on a
+// tmpfs sized to their pages, the report does not. The runner exits
+// non-zero naming report.txt, and leaves no report. (Mounting needs root;
+// skipped with a message elsewhere.)
+TEST_F(OfflineRunner, ADiskThatFillsAtTheReportExitsNonZeroNamingIt) {
+  writeBag(input_, true);
+  std::string message;
+  ASSERT_EQ(run("--bag", &message), 0) << message;
+  const long page = ::sysconf(_SC_PAGESIZE);
+  long pages = 0;
+  long report_pages = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(out_)) {
+    if (!entry.is_regular_file()) continue;
+    const long file_pages = (static_cast<long>(entry.file_size()) + page - 1) / page;
+    pages += file_pages;
+    if (entry.path().filename() == "report.txt") report_pages = file_pages;
+  }
+  ASSERT_GT(report_pages, 0);
+  ASSERT_EQ(std::system(("rm -rf '" + out_ + "' && mkdir -p '" + out_ + "'").c_str()), 0);
+  const std::string size = "size=" + std::to_string((pages - report_pages) * page);
+  if (::mount("tmpfs", out_.c_str(), "tmpfs", 0, size.c_str()) != 0) {
+    GTEST_SKIP() << "cannot mount a tmpfs (" << std::strerror(errno) << "): needs root";
+  }
+  const int code = run("--bag", &message);
+  const bool report = reportExists();
+  ASSERT_EQ(::umount(out_.c_str()), 0) << std::strerror(errno);
+  EXPECT_EQ(code, 3);
+  EXPECT_NE(message.find("report.txt: write error (No space left on device)"), std::string::npos)
+      << message;
+  EXPECT_FALSE(report);
 }
 
 TEST(RealLogs, IntelScansComeInFileOrderWithOdometry) {
