@@ -119,6 +119,11 @@ class InvertedLaser(ReplayTest):
         common = sorted(set(upright) & set(inverted))
         print("poses: upright %d, inverted %d, common %d" % (len(upright), len(inverted),
                                                                len(common)))
+        for n in NODES:
+            print("%s: scans received %s, processed %s; dropped %s" % (
+                n, self.diagnostics.values(n + "/").get("scans received"),
+                self.diagnostics.values(n + "/").get("scans processed"),
+                self.diagnostics.drops(n + "/") or "none"))
         self.assertGreater(len(common), 500)
         self.assertGreater(len(common), 0.95 * max(len(upright), len(inverted)))
         worst = max(math.hypot(upright[t][0] - inverted[t][0], upright[t][1] - inverted[t][1])

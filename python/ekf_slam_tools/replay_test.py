@@ -88,7 +88,11 @@ class ReplayTest(unittest.TestCase):
         """`rosbag play --clock` of the first `seconds` (args.seconds) of
         `bag` (args.bag) at args.rate, started: a subprocess.Popen."""
         seconds = self.args.seconds if seconds is None else seconds
-        command = ["rosbag", "play", "--clock", "--quiet", "-r", str(self.args.rate)]
+        # A queue of 1,000 per topic: on a loaded machine rosbag play would
+        # otherwise drop messages a subscriber has not read yet (its default
+        # is 100), before the node could see or count them.
+        command = ["rosbag", "play", "--clock", "--quiet", "--queue=1000", "-r",
+                   str(self.args.rate)]
         if seconds > 0:
             command += ["-u", str(seconds)]
         return subprocess.Popen(command + [bag or self.args.bag])
@@ -98,9 +102,13 @@ class ReplayTest(unittest.TestCase):
         self.assertEqual(self.player(bag, seconds).wait(), 0, "rosbag play failed")
 
     @staticmethod
-    def settle(count, period=2.0):
+    def settle(count, period=2.0, first=60.0):
         """Waits until count() stops changing for `period` s (wall): the
-        node has worked off its queue."""
+        node has worked off its queue. While count() is 0 it waits up to
+        `first` s for the first (a loaded machine may be that slow)."""
+        deadline = time.time() + first
+        while count() == 0 and time.time() < deadline:
+            time.sleep(0.5)
         last = -1
         while count() != last:
             last = count()
