@@ -149,12 +149,15 @@ void InputQueue::enqueue(PendingInput pending, const std::function<void()>& add)
   // The odometry's check takes the scans as its reference in turn, so that
   // two streams ahead of a lagging clock confirm each other.
   transforms_.noteInputStamp(stamp);
-  const ros::Time reached = transforms_.dataTime(params_.odom_frame, params_.base_frame);
+  // Its own stream counts too, as a transform's does: a scan just after the
+  // last accepted one is not in the future.
+  ros::Time reached = transforms_.dataTime(params_.odom_frame, params_.base_frame);
+  if (last_accepted_stamp_ && *last_accepted_stamp_ > reached) reached = *last_accepted_stamp_;
   const double tolerance = transforms_.futureTolerance();
   if (!reached.isZero() && (stamp - reached).toSec() > tolerance) {
     std::ostringstream detail = detailStream();
     detail << "scan stamp " << stamp.toSec() << " is " << (stamp - reached).toSec()
-           << " s ahead of the clock and the odometry (" << reached.toSec()
+           << " s ahead of the clock, the odometry and the last scan (" << reached.toSec()
            << "; max_future_stamp × the clock's rate: " << tolerance
            << " s); the map is not touched";
     drops_.drop(DropReason::kStampInFuture, detail.str());
