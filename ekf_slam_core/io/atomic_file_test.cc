@@ -1,5 +1,6 @@
 // Saves that refuse what is not a file, and write through symlinks.
 #include "ekf_slam_core/io/atomic_file.h"
+#include "ekf_slam_core/io/test_folder.h"
 
 #include <gtest/gtest.h>
 #include <sys/socket.h>
@@ -13,27 +14,7 @@
 namespace ekf_slam {
 namespace {
 
-class AtomicFile : public ::testing::Test {
- protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/ekf_slam_atomic_XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
-
-  // The names in the folder, one per line, sorted.
-  std::string listing() const {
-    std::string names;
-    FILE* ls = ::popen(("ls -A " + dir_).c_str(), "r");
-    char line[512];
-    while (ls && std::fgets(line, sizeof line, ls)) names += line;
-    if (ls) ::pclose(ls);
-    return names;
-  }
-
-  std::string dir_;
-};
+using AtomicFile = TestFolder;
 
 TEST_F(AtomicFile, ReplacesARegularFile) {
   const std::string path = dir_ + "/map.yaml";

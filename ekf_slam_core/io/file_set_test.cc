@@ -14,29 +14,13 @@
 #include <vector>
 
 #include "ekf_slam_core/io/atomic_file.h"
+#include "ekf_slam_core/io/test_folder.h"
 
 namespace ekf_slam {
 namespace {
 
-class FileSet : public ::testing::Test {
+class FileSet : public TestFolder {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/ekf_slam_file_set_XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
-
-  // The names in the folder, one per line, sorted.
-  std::string listing() const {
-    std::string names;
-    FILE* ls = ::popen(("ls -A " + dir_).c_str(), "r");
-    char line[512];
-    while (ls && std::fgets(line, sizeof line, ls)) names += line;
-    if (ls) ::pclose(ls);
-    return names;
-  }
-
   // name → content of the set's files that exist ("" for none: absent).
   std::map<std::string, std::string> contents(const std::vector<std::string>& names) const {
     std::map<std::string, std::string> found;
@@ -72,8 +56,6 @@ class FileSet : public ::testing::Test {
   std::vector<std::string> paths() const {
     return {dir_ + "/map_grid.pgm", dir_ + "/map_grid.yaml", dir_ + "/map.yaml"};
   }
-
-  std::string dir_;
 };
 
 const std::vector<std::string> kNames = {"map_grid.pgm", "map_grid.yaml", "map.yaml"};
