@@ -37,6 +37,7 @@ import rospy
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Path
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from ekf_slam_tools.replay_test import ReplayTest, main
 from ekf_slam_tools.se2 import wrap, yaw_of
@@ -67,9 +68,12 @@ class LiveLoopReplay(ReplayTest):
         self.odom_to_base = []  # (stamp, x, y, theta)
         self.maps = []
         self.loop_paths = []  # stamps of loop_closed_path messages
+        self.last_loop_path = None
+        self.pose_graph = None  # the newest pose_graph markers, by namespace
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self.on_pose, queue_size=10000)
         rospy.Subscriber("map", OccupancyGrid, self.on_map, queue_size=5)
         rospy.Subscriber("loop_closed_path", Path, self.on_loop_path, queue_size=100)
+        rospy.Subscriber("pose_graph", MarkerArray, self.on_pose_graph, queue_size=5)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10000)
 
     def on_pose(self, msg):
@@ -83,6 +87,10 @@ class LiveLoopReplay(ReplayTest):
 
     def on_loop_path(self, msg):
         self.loop_paths.append(round(msg.header.stamp.to_sec(), 6))
+        self.last_loop_path = msg
+
+    def on_pose_graph(self, msg):
+        self.pose_graph = {m.ns: m for m in msg.markers}
 
     def on_tf(self, msg):
         for t in msg.transforms:
@@ -250,6 +258,21 @@ class LiveLoopReplay(ReplayTest):
                         "the corrected map -> odom of the loop at %.3f was never on /tf: of %d "
                         "transforms sent around it the closest is %s m away" %
                         (loop, len(candidates), min(candidates) if candidates else None))
+
+        # The pose graph as rviz draws it: a node per key scan of the last
+        # loop-closed path, and the loops between two of them.
+        self.assertIsNotNone(self.pose_graph, "no pose_graph markers")
+        nodes = self.pose_graph["pose_graph_nodes"].points
+        keys = {(round(p.pose.position.x, 6), round(p.pose.position.y, 6))
+                for p in self.last_loop_path.poses}
+        self.assertEqual(len(nodes), len(self.last_loop_path.poses))
+        self.assertEqual({(round(p.x, 6), round(p.y, 6)) for p in nodes}, keys)
+        loops = self.pose_graph["pose_graph_loops"]
+        self.assertEqual(loops.action, Marker.ADD, "no loop drawn")
+        self.assertEqual(len(loops.points) % 2, 0)
+        self.assertTrue(all((round(p.x, 6), round(p.y, 6)) in keys for p in loops.points),
+                        "a loop drawn from or to a point that is no key scan")
+        print("pose graph: %d key scans, %d loops drawn" % (len(nodes), len(loops.points) // 2))
 
         # The published poses are the offline runner's causal poses.
         with rosbag.Bag(self.args.bag) as bag:

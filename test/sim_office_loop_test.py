@@ -11,6 +11,8 @@ with tools/dev/sim_monitor.py and asserts its acceptance figures:
     tools/dev/office_monte_carlo.sh, docs/results.md "The pose NEES");
   - no landmark duplicated (two landmarks within 3 sigma of each other at the
     same true corner);
+  - the live grid is on /map within 10 s of the robot moving, grows as it
+    drives, and map_metadata equals the last grid's info;
 and then replays the run's recording through offline.launch
 (ekf_slam_tools.sim_replay.pause_and_replay): the offline outputs exist and the run is
 reproduced (same landmarks, final pose within 1 cm), and the smoothed
@@ -71,6 +73,14 @@ class OfficeLoop(unittest.TestCase):
         self.assertLess(r["nees_average"], 10.0)
         self.assertEqual(len(r["duplicates"]), 0, "duplicated landmarks: %s" % r["duplicates"])
         self.assertGreater(r["landmarks_near_true_corners"], 10)
+        # The live grid of the default simulation (loop closure off): on
+        # `map` within 10 s of the robot moving, growing as it drives, with
+        # map_metadata describing it.
+        live = r["live_map"]
+        self.assertIsNotNone(live["map_delay"], "no grid on /map after the robot moved")
+        self.assertLess(live["map_delay"], 10.0)
+        self.assertGreater(live["last_known_cells"], live["first_known_cells"])
+        self.assertTrue(live["metadata_matches"], "map_metadata differs from the last map's info")
 
         bag = argv[argv.index("--bag") + 1]
         replay = sim_replay.pause_and_replay(self, os.path.join(args.out, "replay"),

@@ -87,6 +87,12 @@ void LoopClosureBackEnd::publish() {
     view->key_scan_index.push_back(closer_.keyScanIndex(k));
     view->key_points.push_back(closer_.sharedKeyPoints(k));
   }
+  const std::vector<PoseGraphEdge>& edges = closer_.graph().edges();
+  for (int e = 0; e < static_cast<int>(edges.size()); ++e) {
+    if (edges[e].robust && edges[e].active) {
+      view->loops.push_back({edges[e].from, edges[e].to, closer_.isHeadingEdge(e)});
+    }
+  }
   key_count_ = keys;
   optimisations_ = counters.optimisations;
   views_.push_back(std::move(view));

@@ -29,6 +29,12 @@
 
 namespace ekf_slam {
 
+// A loop of the graph between two key scans (for drawing it).
+struct LoopLink {
+  int from = 0, to = 0;
+  bool heading_only = false;  // a heading edge between the walls of one place
+};
+
 // The back end's state after `scans` scans had been processed.
 struct BackEndView {
   long scans = 0;
@@ -38,6 +44,7 @@ struct BackEndView {
   std::vector<double> key_stamps;
   std::vector<int> key_scan_index;  // index of the key scan's scan in addScan order
   std::vector<std::shared_ptr<const std::vector<Vector2>>> key_points;  // robot frame
+  std::vector<LoopLink> loops;  // the graph's active loop and heading edges
 
   // The loop-closed pose (graph frame) of a scan whose front-end pose is
   // `front_end`: hung off the newest key scan of the view. Before the first

@@ -316,6 +316,8 @@ class LoopCloser {
   // and heading edges are the graph's robust edges (a heading edge informs
   // the heading alone); the sequential ones are not robust.
   int keyScanIndex(int key) const { return keys_[key].scan_index; }
+  // Graph edge `edge` is a heading edge (a robust edge that is not).
+  bool isHeadingEdge(int edge) const { return heading_edges_.count(edge) > 0; }
   int keyCount() const { return static_cast<int>(keys_.size()); }
   // A key scan's readings (≤ max_range, robot frame; empty when released,
   // max_keyscans_per_place) and its scan's stamp.

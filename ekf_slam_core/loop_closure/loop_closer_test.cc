@@ -703,6 +703,11 @@ struct BackEndRun {
   std::vector<Pose2> causal;
   std::vector<long> accepted_by, scans_seen;
   std::vector<Pose2> closed;  // after finish()
+  // The loops of the last view: per loop (not heading-only), the true
+  // distance between its two key scans and how many key scans apart they are.
+  std::vector<double> loop_true_distance;
+  std::vector<int> loop_key_gap;
+  int heading_loops = 0;
 };
 
 BackEndRun runTwoLapsThroughBackEnd(bool own_thread, int delay) {
@@ -714,13 +719,25 @@ BackEndRun runTwoLapsThroughBackEnd(bool own_thread, int delay) {
   LoopClosureBackEnd back_end(options, ScanMatcherOptions(), own_thread);
   BackEndRun run;
   Pose2 front_end = truth.front();
+  std::shared_ptr<const BackEndView> view;
   for (size_t i = 0; i < truth.size(); ++i) {
     if (i > 0) front_end = driftedStep(front_end, truth[i - 1], truth[i]);
-    const std::shared_ptr<const BackEndView> view =
-        back_end.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
+    view = back_end.addScan(0.1 * i, sweep(world, truth[i], &rng), Pose2(), front_end, true);
     run.causal.push_back(view->poseOf(front_end));
     run.accepted_by.push_back(view->counters.accepted);
     run.scans_seen.push_back(view->scans);
+  }
+  const int keys = static_cast<int>(view->key_poses.size());
+  for (const LoopLink& link : view->loops) {
+    EXPECT_TRUE(link.from >= 0 && link.from < keys && link.to >= 0 && link.to < keys);
+    if (link.heading_only) {
+      ++run.heading_loops;
+      continue;
+    }
+    const Pose2& a = truth[view->key_scan_index[link.from]];
+    const Pose2& b = truth[view->key_scan_index[link.to]];
+    run.loop_true_distance.push_back(std::hypot(a.x - b.x, a.y - b.y));
+    run.loop_key_gap.push_back(std::abs(link.to - link.from));
   }
   LoopCloser& closer = back_end.drained();
   closer.finish();
@@ -746,6 +763,15 @@ TEST(LoopClosureBackEnd, DelayZeroIsTheSynchronousLoopCloser) {
   expectBitIdentical(inline_run.causal, sync.causal, "inline, delay 0");
   EXPECT_EQ(inline_run.accepted_by, sync.accepted_by);
   expectBitIdentical(inline_run.closed, sync.closed, "final");
+  // The view names the graph's loops, for drawing them: as many as were
+  // accepted (none is dropped before finish), each joining key scans of
+  // the two laps that stood in the same place of the hall.
+  EXPECT_EQ(static_cast<long>(inline_run.loop_true_distance.size()), sync.counters.accepted);
+  EXPECT_EQ(inline_run.heading_loops, sync.counters.heading_loops);
+  for (size_t i = 0; i < inline_run.loop_true_distance.size(); ++i) {
+    EXPECT_LT(inline_run.loop_true_distance[i], 2.0) << "loop " << i;
+    EXPECT_GT(inline_run.loop_key_gap[i], 10) << "loop " << i;
+  }
 }
 
 // The deterministic mode: on its own thread the back end gives every scan

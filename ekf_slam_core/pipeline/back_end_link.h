@@ -57,6 +57,8 @@ class BackEndLink {
     std::vector<Vector2> points;
   };
   std::vector<KeyScan> keyScans(bool with_points) const;
+  // The graph's loops between those key scans (indices into keyScans()).
+  std::vector<LoopLink> loops() const { return view_ ? view_->loops : std::vector<LoopLink>(); }
   long optimisations() const { return view_ ? view_->counters.optimisations : 0; }
   LoopClosureCounters counters() const { return view_ ? view_->counters : LoopClosureCounters(); }
   long backlog() const { return back_end_ ? back_end_->backlog() : 0; }

@@ -1,6 +1,7 @@
-// The occupancy grid on `map`: the live map (LiveMapPublisher, rebuilt in
-// its own thread from the back end's key scans every map_update_interval
-// when loop closure is on) and the grids the services publish themselves
+// The occupancy grid on `map`: the live map (LiveMapPublisher, built in its
+// own thread every map_update_interval: from the back end's key scans with
+// loop closure, else from the scans the history keeps) and the grids the
+// services publish themselves
 // (~smooth, ~load_map). currentGrid() is the newer of the two, what
 // ~save_map writes. A grid loaded for localisation stays on `map`: the
 // live map does not replace it.
@@ -26,8 +27,9 @@ namespace ekf_slam {
 
 class GridOutput {
  public:
-  // `live`: build the live map (loop closure on and map_update_interval >
-  // 0). `params` and `slam` must outlive the output.
+  // `live`: build the live map (map_update_interval > 0, and loop closure
+  // on or the scans' readings kept). `params` and `slam` must outlive the
+  // output.
   GridOutput(ros::NodeHandle node, const SlamNodeParams& params, const OccupancyGridOptions& map,
              bool live, const SlamControl& slam);
 
@@ -38,7 +40,8 @@ class GridOutput {
   // true: the live map leaves the grid on `map` alone (a loaded map for
   // localisation); false: it replaces it with its next grid.
   void hold(bool hold) { hold_ = hold; }
-  // A new pipeline: its key scans are all new to the live map.
+  // A new pipeline: its key scans and scans are all new to the live map,
+  // which starts a new grid from them.
   void restart();
   // ~reset: no grid at all until the next one is built.
   void forget();
@@ -49,6 +52,12 @@ class GridOutput {
   // A new grid when the key scans changed (a new key scan or a new
   // optimisation) and the worker is free; it never blocks the scans.
   void onMapTimer(const ros::TimerEvent&);
+  // With loop closure: every key scan, when they changed since the last grid.
+  void submitKeyScans(const SlamPipeline& pipeline, const Pose2& laser,
+                      const std_msgs::Header& header);
+  // Without: the kept scans the live map has not cast yet.
+  void submitNewScans(const SlamPipeline& pipeline, const Pose2& laser,
+                      const std_msgs::Header& header);
 
   const SlamNodeParams& params_;
   const SlamControl& slam_;
@@ -58,6 +67,7 @@ class GridOutput {
   ros::Timer map_timer_;
   long optimisations_mapped_ = -1;  // back-end optimisations seen by the last grid submitted
   int keys_mapped_ = 0;             // key scans in that grid
+  long scans_mapped_ = 0;           // without loop closure: the scans before this one are cast
   // The grid the node published itself and when; the live map keeps its own.
   std::optional<nav_msgs::OccupancyGrid> node_grid_;
   std::chrono::steady_clock::time_point node_grid_time_;

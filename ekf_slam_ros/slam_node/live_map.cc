@@ -63,12 +63,29 @@ LiveMapPublisher::~LiveMapPublisher() {
 
 bool LiveMapPublisher::submit(std::vector<SlamPipeline::KeyScan> keys, const Pose2& laser,
                               const std_msgs::Header& header) {
+  Job job;
+  job.keys = std::move(keys);
+  job.laser = laser;
+  job.header = header;
+  return hand(std::move(job));
+}
+
+bool LiveMapPublisher::submitScans(std::vector<KeptScan> scans, const Pose2& laser,
+                                   const std_msgs::Header& header) {
+  Job job;
+  job.scans = std::move(scans);
+  job.incremental = true;
+  job.laser = laser;
+  job.header = header;
+  return hand(std::move(job));
+}
+
+bool LiveMapPublisher::hand(Job job) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (pending_) return false;
-    keys_ = std::move(keys);
-    laser_ = laser;
-    header_ = header;
+    job.generation = generation_;
+    job_ = std::move(job);
     pending_ = true;
   }
   wake_.notify_all();
@@ -94,38 +111,66 @@ bool LiveMapPublisher::latest(nav_msgs::OccupancyGrid* map,
   return true;
 }
 
-void LiveMapPublisher::forget() {
+void LiveMapPublisher::newMap() {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
+  ++generation_;
+}
+
+void LiveMapPublisher::forget() {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++generation_;
   have_latest_ = false;
   latest_ = nav_msgs::OccupancyGrid();
 }
 
+nav_msgs::OccupancyGrid LiveMapPublisher::build(const Job& job) {
+  if (!job.incremental) {
+    return toOccupancyGridMessage(gridFromKeyScans(job.keys, job.laser, options_), job.header);
+  }
+  if (!kept_grid_ || kept_generation_ != job.generation) {
+    kept_grid_.emplace(options_);
+    kept_generation_ = job.generation;
+  }
+  for (const KeptScan& scan : job.scans) {
+    kept_grid_->insertScan(compose(scan.causal, job.laser), scan.toScan());
+  }
+  return toOccupancyGridMessage(*kept_grid_, job.header);
+}
+
 void LiveMapPublisher::run() {
   for (;;) {
-    std::vector<SlamPipeline::KeyScan> keys;
-    Pose2 laser;
-    std_msgs::Header header;
+    Job job;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [this] { return stop_ || pending_; });
       if (stop_) return;
-      keys.swap(keys_);
-      laser = laser_;
-      header = header_;
+      job = std::move(job_);
+      job_ = Job();
     }
     {
       const auto start = std::chrono::steady_clock::now();
-      const nav_msgs::OccupancyGrid map =
-          toOccupancyGridMessage(gridFromKeyScans(keys, laser, options_), header);
-      map_publisher_.publish(map);
-      metadata_publisher_.publish(map.info);
+      const nav_msgs::OccupancyGrid map = build(job);
+      std::lock_guard<std::mutex> publishing(publish_mutex_);
+      bool current;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        current = job.generation == generation_;  // else the map it belongs to is gone
+      }
+      if (current) {
+        map_publisher_.publish(map);
+        metadata_publisher_.publish(map.info);
+      }
       std::lock_guard<std::mutex> lock(mutex_);
-      ++published_;
-      latest_ = map;
-      latest_time_ = std::chrono::steady_clock::now();
-      have_latest_ = true;
-      last_build_seconds_ =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (current) {
+        ++published_;
+        latest_ = map;
+        latest_time_ = std::chrono::steady_clock::now();
+        have_latest_ = true;
+        last_build_seconds_ =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      }
       pending_ = false;
     }
     // The grid just built and the key scans' copy are freed now, and so is
@@ -134,8 +179,7 @@ void LiveMapPublisher::run() {
     // keeps such pages unless told; handing them back here, on this
     // thread, lets the resident set show what the node really holds
     // (docs/robustness.md, Soak) without the scan thread ever waiting for it.
-    keys.clear();
-    keys.shrink_to_fit();
+    job = Job();
 #ifdef __GLIBC__
     malloc_trim(0);
 #endif

@@ -25,6 +25,7 @@ ScanOutputs::ScanOutputs(ros::NodeHandle node, const SlamNodeParams& params) : p
   association_publisher_ = node.advertise<AssociationReport>("association", 10);
   smoothed_path_publisher_ = node.advertise<nav_msgs::Path>("smoothed_path", 1, true);
   loop_closed_path_publisher_ = node.advertise<nav_msgs::Path>("loop_closed_path", 1, true);
+  pose_graph_publisher_ = node.advertise<visualization_msgs::MarkerArray>("pose_graph", 1, true);
   path_.header.frame_id = params_.map_frame;
   odometry_path_.header.frame_id = params_.map_frame;
 }
@@ -104,14 +105,18 @@ void ScanOutputs::publishLoopClosedPath(const SlamPipeline& pipeline, const ros:
   nav_msgs::Path path;
   path.header.stamp = stamp;
   path.header.frame_id = params_.map_frame;
+  std::vector<Pose2> key_poses;
   for (const SlamPipeline::KeyScan& key : pipeline.keyScans(/*with_points=*/false)) {
     geometry_msgs::PoseStamped p;
     p.header.stamp = ros::Time(key.stamp);
     p.header.frame_id = params_.map_frame;
     p.pose = toPoseMessage(key.pose);
     path.poses.push_back(p);
+    key_poses.push_back(key.pose);
   }
   loop_closed_path_publisher_.publish(path);
+  pose_graph_publisher_.publish(
+      poseGraphMarkers(key_poses, pipeline.backEnd().loops(), path.header));
 }
 
 }  // namespace ekf_slam

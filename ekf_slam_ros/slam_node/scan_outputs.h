@@ -1,5 +1,6 @@
 // What the node publishes per processed scan, in this order: the
-// loop-closed path (when the back end optimised since the last scan), the
+// loop-closed path and the pose graph's markers (when the back end
+// optimised since the last scan), the
 // pose, the path, the odometry path, and, after an iteration, the landmark
 // markers, the landmark map and the association report. Every output is
 // stamped with the scan's stamp (data time). Also the paths the services
@@ -38,6 +39,7 @@ class ScanOutputs {
   void clear();
 
  private:
+  // The loop-closed path and the pose graph's markers.
   void publishLoopClosedPath(const SlamPipeline& pipeline, const ros::Time& stamp);
   // Appends a pose to `path` (kept to path_max_poses) and publishes it.
   void extend(nav_msgs::Path* path, const geometry_msgs::PoseStamped& pose,
@@ -46,7 +48,7 @@ class ScanOutputs {
   const SlamNodeParams& params_;
   ros::Publisher pose_publisher_, path_publisher_, odometry_path_publisher_, landmarks_publisher_,
       landmark_map_publisher_, association_publisher_, smoothed_path_publisher_,
-      loop_closed_path_publisher_;
+      loop_closed_path_publisher_, pose_graph_publisher_;
   nav_msgs::Path path_;
   // The robot's own odometry drawn in the map frame, tied to the SLAM pose at
   // the first scan: where the robot would believe it is without SLAM.

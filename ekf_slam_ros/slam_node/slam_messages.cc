@@ -466,4 +466,36 @@ visualization_msgs::MarkerArray landmarkMarkers(const EkfSlam& filter,
   return out;
 }
 
+visualization_msgs::MarkerArray poseGraphMarkers(const std::vector<Pose2>& key_poses,
+                                                 const std::vector<LoopLink>& loops,
+                                                 const std_msgs::Header& header) {
+  visualization_msgs::Marker nodes =
+      marker(header, "pose_graph_nodes", 0, visualization_msgs::Marker::SPHERE_LIST);
+  nodes.scale.x = nodes.scale.y = nodes.scale.z = 0.08;
+  nodes.color = colour(0.3f, 0.5f, 1.0f);
+  visualization_msgs::Marker edges =
+      lineList(header, "pose_graph_edges", 0, 0.015, colour(0.5f, 0.6f, 0.9f, 0.8f));
+  visualization_msgs::Marker closed =
+      lineList(header, "pose_graph_loops", 0, 0.03, colour(1.0f, 0.3f, 0.1f));
+  visualization_msgs::Marker heading =
+      lineList(header, "pose_graph_heading_loops", 0, 0.015, colour(1.0f, 0.8f, 0.1f, 0.8f));
+  const int count = static_cast<int>(key_poses.size());
+  for (int k = 0; k < count; ++k) {
+    const Vector2 at = key_poses[k].translation();
+    nodes.points.push_back(point(at.x(), at.y()));
+    if (k > 0) addSegment(key_poses[k - 1].translation(), at, &edges);
+  }
+  for (const LoopLink& link : loops) {
+    if (link.from < 0 || link.to < 0 || link.from >= count || link.to >= count) continue;
+    addSegment(key_poses[link.from].translation(), key_poses[link.to].translation(),
+               link.heading_only ? &heading : &closed);
+  }
+  visualization_msgs::MarkerArray out;
+  for (visualization_msgs::Marker* m : {&nodes, &edges, &closed, &heading}) {
+    if (m->points.empty()) m->action = visualization_msgs::Marker::DELETE;
+    out.markers.push_back(*m);
+  }
+  return out;
+}
+
 }  // namespace ekf_slam

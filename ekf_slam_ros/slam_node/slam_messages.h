@@ -18,6 +18,7 @@
 #include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/filter/slam_iteration.h"
 #include "ekf_slam_core/io/landmark_map.h"
+#include "ekf_slam_core/loop_closure/back_end.h"
 
 namespace ekf_slam {
 
@@ -83,5 +84,16 @@ visualization_msgs::MarkerArray landmarkMarkers(const EkfSlam& filter,
                                                 const std::unordered_map<int, LineSupport>& support,
                                                 const IterationReport* iteration,
                                                 const std_msgs::Header& header, double probability);
+
+// rviz view of the loop-closing pose graph (map frame in `header`): the key
+// scans' positions ("pose_graph_nodes"), the sequential edges joining
+// consecutive key scans ("pose_graph_edges"), the loops
+// ("pose_graph_loops") and the heading-only edges between the walls of one
+// place ("pose_graph_heading_loops"). `loops` index `key_poses`; a link
+// naming a key beyond them is left out. An empty list is sent as a DELETE
+// of its marker (rviz refuses empty lists).
+visualization_msgs::MarkerArray poseGraphMarkers(const std::vector<Pose2>& key_poses,
+                                                 const std::vector<LoopLink>& loops,
+                                                 const std_msgs::Header& header);
 
 }  // namespace ekf_slam

@@ -404,5 +404,58 @@ TEST(Messages, FeaturesOfASimulatedRoomKeepEveryPointAndLine) {
   EXPECT_EQ(static_cast<int>(markers.markers[1].points.size()), candidates);
 }
 
+// The pose graph in rviz: a node per key scan, a segment between
+// consecutive ones, and each loop between the two key scans it joins.
+TEST(PoseGraphMarkers, JoinTheKeyScansTheGraphJoins) {
+  const std::vector<Pose2> keys = {
+      {0.0, 0.0, 0.0}, {1.0, 0.0, 0.5}, {1.0, 1.0, 1.5}, {0.1, 0.9, 3.0}};
+  std::vector<LoopLink> loops = {{0, 3, false}, {1, 3, true}, {0, 9, false}};
+  std_msgs::Header header;
+  header.frame_id = "map";
+  header.stamp = ros::Time(12.5);
+  const visualization_msgs::MarkerArray markers = poseGraphMarkers(keys, loops, header);
+  std::map<std::string, visualization_msgs::Marker> by_ns;
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    EXPECT_EQ(m.header.frame_id, "map");
+    EXPECT_EQ(m.header.stamp, header.stamp);
+    by_ns[m.ns] = m;
+  }
+  ASSERT_EQ(by_ns.size(), 4u);
+  const auto at = [](const geometry_msgs::Point& p) { return Vector2(p.x, p.y); };
+  const visualization_msgs::Marker& nodes = by_ns["pose_graph_nodes"];
+  ASSERT_EQ(nodes.points.size(), keys.size());
+  for (size_t k = 0; k < keys.size(); ++k) {
+    EXPECT_EQ(at(nodes.points[k]), keys[k].translation());
+  }
+  const visualization_msgs::Marker& edges = by_ns["pose_graph_edges"];
+  ASSERT_EQ(edges.points.size(), 6u);
+  for (size_t k = 1; k < keys.size(); ++k) {
+    EXPECT_EQ(at(edges.points[2 * (k - 1)]), keys[k - 1].translation());
+    EXPECT_EQ(at(edges.points[2 * (k - 1) + 1]), keys[k].translation());
+  }
+  // The link to a key scan beyond the list is left out.
+  const visualization_msgs::Marker& closed = by_ns["pose_graph_loops"];
+  ASSERT_EQ(closed.points.size(), 2u);
+  EXPECT_EQ(at(closed.points[0]), keys[0].translation());
+  EXPECT_EQ(at(closed.points[1]), keys[3].translation());
+  const visualization_msgs::Marker& heading = by_ns["pose_graph_heading_loops"];
+  ASSERT_EQ(heading.points.size(), 2u);
+  EXPECT_EQ(at(heading.points[0]), keys[1].translation());
+  for (const auto& [ns, m] : by_ns) {
+    EXPECT_EQ(m.action, visualization_msgs::Marker::ADD) << ns;
+    EXPECT_GT(m.scale.x, 0.0) << ns;
+    EXPECT_GT(m.color.a, 0.0) << ns;
+  }
+
+  // Before the first loop the loop lists are empty: sent as DELETEs.
+  const visualization_msgs::MarkerArray early = poseGraphMarkers(keys, {}, header);
+  for (const visualization_msgs::Marker& m : early.markers) {
+    const bool loop_list = m.ns == "pose_graph_loops" || m.ns == "pose_graph_heading_loops";
+    EXPECT_EQ(m.action,
+              loop_list ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD)
+        << m.ns;
+  }
+}
+
 }  // namespace
 }  // namespace ekf_slam

@@ -39,6 +39,19 @@ std::optional<Pose2> frontMount(const SlamConfig& config) {
   return config.pipeline.filter.laser_pose;
 }
 
+// Whether the history keeps the scans' readings: ~smooth draws its grid
+// from the back end's key scans, and without a back end (loop closure off)
+// from the readings; features from feature_node carry none.
+bool keepsReadings(const SlamNodeParams& params, const SlamConfig& config) {
+  return params.input == "scan" && !config.pipeline.loop_closure.enabled;
+}
+
+// A live map on `map`: from the key scans, else from the kept readings.
+bool liveMap(const SlamNodeParams& params, const SlamConfig& config) {
+  return params.map_update_interval > 0.0 &&
+         (config.pipeline.loop_closure.enabled || keepsReadings(params, config));
+}
+
 }  // namespace
 
 SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,
@@ -51,8 +64,7 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
       localize_only_(params.localize_only),
       outputs_(node, params_),
       map_to_odom_(node, params_, transforms_),
-      grids_(node, params_, config_.map,
-             params_.map_update_interval > 0.0 && config_.pipeline.loop_closure.enabled, *this),
+      grids_(node, params_, config_.map, liveMap(params_, config_), *this),
       services_(node, private_node, params_, config_.map, *this, outputs_, grids_),
       input_(node, params_, transforms_, drops_,
              {[this] { return services_.paused(); }, [this] { onClockJump(); },
@@ -64,7 +76,13 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
                 : std::make_unique<RearScanMerger>(node, params_, frontMount(config_), transforms_,
                                                    drops_, input_.topic())),
       diagnostics_(node, private_node, params_, config_.pipeline,
-                   {this, &drops_, &transforms_, &input_, rear_.get(), &grids_, &services_}) {}
+                   {this, &drops_, &transforms_, &input_, rear_.get(), &grids_, &services_}) {
+  if (params_.map_update_interval > 0.0 && !liveMap(params_, config_)) {
+    ROS_INFO(
+        "ekf_slam_node: no live grid on `map`: features carry no readings and loop closure "
+        "(whose key scans would give one) is off");
+  }
+}
 
 void SlamNode::onReleased(const PendingInput& pending, const Pose2& odometry, const Pose2& laser) {
   if (!rear_ || !pending.scan) {
@@ -112,10 +130,10 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   // memory follows the map, not the time (the causal poses do not depend
   // on it). The offline runner keeps every scan: it writes one pose each.
   options.history_scans = params_.history_max_scans;
-  // ~smooth draws its grid from the back end's key scans; without a back
-  // end (loop closure off) the history keeps the scans' readings, and casts
-  // those older than history_max_scans into a grid of its own.
-  options.keep_readings = params_.input == "scan" && !config_.pipeline.loop_closure.enabled;
+  // Without a back end the history keeps the scans' readings for the live
+  // map and ~smooth, and casts those older than history_max_scans into a
+  // grid of its own.
+  options.keep_readings = keepsReadings(params_, config_);
   options.readings_grid = config_.map;
   if (start_pose_) {
     options.initial_pose = *start_pose_;

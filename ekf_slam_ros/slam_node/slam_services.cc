@@ -399,7 +399,7 @@ bool SlamServices::onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
   const bool copied = onSpinThread([&] {
     const SlamPipeline* pipeline = slam_.pipeline();
     if (!pipeline || pipeline->scans().empty()) return;
-    input.emplace(SmoothInput{pipeline->smoothingProblem()});
+    input.emplace(SmoothInput{pipeline->smoothingProblem(), {}, Pose2(), 0, 0, 0, {}, 0});
     // With loop closure on the history keeps no readings: the grid is cast
     // from the back end's key scans.
     if (input->problem.history.keptScans().empty()) input->keys = pipeline->keyScans(true);

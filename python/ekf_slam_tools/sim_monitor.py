@@ -27,6 +27,7 @@ import argparse
 import math
 import os
 import sys
+import threading
 import time
 
 import numpy as np
@@ -159,7 +160,19 @@ def report_text(r):
             r["nees_band_95"][0], r["nees_band_95"][1], 1e3 * TRUTH_SIGMA[0], 1e3 * TRUTH_SIGMA[2]),
         "landmarks: %d (%d within 0.3 m of a true corner), duplicated: %d" % (
             r["landmarks"], r["landmarks_near_true_corners"], len(r["duplicates"])),
-    ] + (["ended early: " + r["ended_early"]] if r.get("ended_early") else [])) + "\n"
+    ] + live_map_lines(r.get("live_map")) +
+        (["ended early: " + r["ended_early"]] if r.get("ended_early") else [])) + "\n"
+
+
+def live_map_lines(live):
+    if not live:
+        return []
+    delay = live["map_delay"]
+    return ["live map: %d grids while driving, the first %s after the robot moved; known cells "
+            "%d -> %d; map_metadata %s the last grid's info" % (
+                live["maps"], "%.1f s" % delay if delay is not None else "never",
+                live["first_known_cells"], live["last_known_cells"],
+                "matches" if live["metadata_matches"] else "DIFFERS from")]
 
 
 def write_outputs(out, r, landmarks, world_yaml):
@@ -223,11 +236,20 @@ class Recorder:
     def __init__(self, slam_node):
         import rospy
         from geometry_msgs.msg import PoseWithCovarianceStamped
-        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
         from std_msgs.msg import Bool
         self.truth, self.slam, self.odom = [], [], []
         self.done = False
         self.slam_node = slam_node
+        # The live grid: when the true robot first moved (wall time), each
+        # `map` as it arrived while the robot drove (wall time, its info,
+        # its known cells) and the newest `map_metadata`.
+        self.moved_at = None
+        self.maps = []
+        self.metadata = None
+        self._lock = threading.Lock()
+        rospy.Subscriber("map", OccupancyGrid, self._map, queue_size=2)
+        rospy.Subscriber("map_metadata", MapMetaData, self._metadata, queue_size=2)
         rospy.Subscriber("ground_truth/odom", Odometry, self._truth, queue_size=200)
         rospy.Subscriber("odom", Odometry, self._odom, queue_size=200)
         rospy.Subscriber("pose", PoseWithCovarianceStamped, self._slam, queue_size=200)
@@ -246,6 +268,40 @@ class Recorder:
 
     def _truth(self, msg):
         self._append(self.truth, msg.header.stamp, msg.pose.pose)
+        if self.moved_at is None and len(self.truth) > 1:
+            first, last = self.truth[0], self.truth[-1]
+            if math.hypot(last[1] - first[1], last[2] - first[2]) > 0.05:
+                self.moved_at = time.time()
+
+    def _map(self, msg):
+        if self.done:
+            return  # what the end's ~smooth publishes is not the live map
+        known = sum(1 for v in msg.data if v >= 0)
+        with self._lock:
+            self.maps.append((time.time(), msg.info, known))
+
+    def _metadata(self, msg):
+        with self._lock:
+            self.metadata = msg
+
+    def live_map(self):
+        """The live grid as the run saw it: the seconds from the robot's
+        first motion to the first `map` after it (None when none came), the
+        number of maps while it drove, the known cells of the first and the
+        last, and whether the newest `map_metadata` equals the newest map's
+        info."""
+        with self._lock:
+            maps, metadata = list(self.maps), self.metadata
+        moved = self.moved_at
+        after = [m for m in maps if moved is not None and m[0] >= moved]
+        same = bool(maps) and metadata is not None and metadata_equal(maps[-1][1], metadata)
+        return {
+            "map_delay": after[0][0] - moved if after else None,
+            "maps": len(maps),
+            "first_known_cells": maps[0][2] if maps else 0,
+            "last_known_cells": maps[-1][2] if maps else 0,
+            "metadata_matches": same,
+        }
 
     def _odom(self, msg):
         self._append(self.odom, msg.header.stamp, msg.pose.pose)
@@ -304,6 +360,12 @@ class Recorder:
         return landmarks
 
 
+def metadata_equal(a, b):
+    """Two nav_msgs/MapMetaData describe the same grid (load time aside)."""
+    return (a.resolution == b.resolution and a.width == b.width and a.height == b.height and
+            a.origin == b.origin)
+
+
 def resume_when_recording(recorder_node, slam_node="/ekf_slam", topic="/scan", timeout=60.0):
     """For a SLAM node started paused (start_paused): waits until
     `recorder_node` subscribes to `topic` (and a second more for the
@@ -347,10 +409,13 @@ def run(args):
             break
         rate.sleep()
     rospy.sleep(1.0)  # the last scan's pose
+    live_map = recorder.live_map()
+    recorder.done = True
     landmarks = recorder.finish(args.out)
     result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
                    world_vertices(args.world))
     result["ended_early"] = ended_early
+    result["live_map"] = live_map
     world_yaml = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "worlds",
                               args.world + ".yaml")
     write_outputs(args.out, result, landmarks, world_yaml)
