@@ -1,9 +1,11 @@
 #include "ekf_slam_ros/carmen_to_bag/carmen_to_bag.h"
 
 #include <nav_msgs/Odometry.h>
+#include <ros/message_traits.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
+#include <boost/make_shared.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -18,6 +20,18 @@ geometry_msgs::Quaternion yawQuaternion(double yaw) {
   q.z = std::sin(yaw / 2.0);
   q.w = std::cos(yaw / 2.0);
   return q;
+}
+
+// The connection header of a latched publisher of `msg`'s type.
+template <class M>
+boost::shared_ptr<ros::M_string> latchedHeader(const M& msg) {
+  auto header = boost::make_shared<ros::M_string>();
+  (*header)["callerid"] = "/carmen_to_bag";
+  (*header)["latching"] = "1";
+  (*header)["type"] = ros::message_traits::datatype(msg);
+  (*header)["md5sum"] = ros::message_traits::md5sum(msg);
+  (*header)["message_definition"] = ros::message_traits::definition(msg);
+  return header;
 }
 
 geometry_msgs::TransformStamped transformOf(const std::string& parent, const std::string& child,
@@ -71,7 +85,11 @@ std::string convertCarmenToBag(const std::string& carmen_path, const std::string
     tf2_msgs::TFMessage statics;
     statics.transforms.push_back(
         transformOf("base_link", "laser", ros::Time(first.scan.stamp), first.laser_in_robot));
-    bag.write("/tf_static", ros::Time(first.scan.stamp), statics);
+    // Written once at the start: latched, as tf2's static broadcaster
+    // publishes it, so that `rosbag play` hands it to every subscriber that
+    // comes later (rviz, a node restarted) and not only to those present
+    // at the start.
+    bag.write("/tf_static", ros::Time(first.scan.stamp), statics, latchedHeader(statics));
     for (size_t i = 0; i < log.lasers.size(); ++i) {
       const CarmenLaser& laser = log.lasers[i];
       const ros::Time stamp(laser.scan.stamp);

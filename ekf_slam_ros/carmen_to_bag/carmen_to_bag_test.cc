@@ -2,6 +2,8 @@
 #include "ekf_slam_ros/carmen_to_bag/carmen_to_bag.h"
 
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -88,6 +90,37 @@ TEST_F(CarmenFiles, RoundTripGivesBackTheSameScansOdometryAndMount) {
     EXPECT_NEAR(b.odometry.y, a.odometry.y, 1e-9) << "scan " << i;
     EXPECT_NEAR(wrapAngle(b.odometry.theta - a.odometry.theta), 0.0, 1e-9) << "scan " << i;
   }
+}
+
+// rosbag play republishes a connection latched when its header says so:
+// the mount, written once, must reach subscribers that start later.
+TEST_F(CarmenFiles, TheMountIsWrittenLatchedAndTheStreamsAreNot) {
+  {
+    std::ofstream out(log_);
+    for (int i = 0; i < 3; ++i) out << flaser(i) << "\n";
+  }
+  ASSERT_EQ(convertCarmenToBag(log_, bag_), "");
+  rosbag::Bag bag(bag_, rosbag::bagmode::Read);
+  rosbag::View view(bag);
+  int static_connections = 0;
+  for (const rosbag::ConnectionInfo* connection : view.getConnections()) {
+    ASSERT_TRUE(connection->header) << connection->topic;
+    const auto latching = connection->header->find("latching");
+    const bool latched = latching != connection->header->end() && latching->second == "1";
+    if (connection->topic == "/tf_static") {
+      ++static_connections;
+      EXPECT_TRUE(latched);
+      EXPECT_EQ(connection->datatype, "tf2_msgs/TFMessage");
+      EXPECT_EQ(connection->header->at("type"), "tf2_msgs/TFMessage");
+      EXPECT_FALSE(connection->header->at("callerid").empty());
+      EXPECT_FALSE(connection->header->at("message_definition").empty());
+    } else {
+      EXPECT_FALSE(latched) << connection->topic;
+    }
+  }
+  EXPECT_EQ(static_connections, 1);
+  rosbag::View statics(bag, rosbag::TopicQuery("/tf_static"));
+  EXPECT_EQ(statics.size(), 1u);
 }
 
 TEST_F(CarmenFiles, AWrongFieldCountIsNamedAndNoBagIsLeft) {
