@@ -2,12 +2,16 @@
 """Every launch file parses and documents its arguments (test/launch_files.test).
 
 For each file in launch/, `roslaunch --ros-args FILE` must succeed and list
-every argument with its doc= text: none may show as "undocumented".
+every argument with its doc= text: none may show as "undocumented". An
+argument with a default is optional: roslaunch lists any whose default is
+the empty string as "Required", so none may have one (a sentinel such as
+"none" says "not used" instead).
 """
 import glob
 import os
 import subprocess
 import unittest
+import xml.etree.ElementTree as ElementTree
 
 import rospkg
 import rostest
@@ -28,6 +32,28 @@ class LaunchFiles(unittest.TestCase):
             for line in listed:
                 self.assertNotIn("undocumented", line, name)
                 self.assertRegex(line, r"^  \w+( \(default [^)]*\))?: \S", name + ": " + line)
+
+    def test_no_argument_with_a_default_is_listed_as_required(self):
+        launch_dir = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "launch")
+        for path in sorted(glob.glob(os.path.join(launch_dir, "*.launch"))):
+            name = os.path.basename(path)
+            with_default = [arg.get("name") for arg in ElementTree.parse(path).getroot().iter("arg")
+                            if arg.get("default") is not None]
+            empty = [arg.get("name") for arg in ElementTree.parse(path).getroot().iter("arg")
+                     if arg.get("default") == ""]
+            self.assertEqual(empty, [], name + ": empty defaults, listed as required by roslaunch")
+            run = subprocess.run(["roslaunch", "--ros-args", path], stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, universal_newlines=True)
+            self.assertEqual(run.returncode, 0, name + ": " + run.stdout)
+            required = []
+            section = None
+            for line in run.stdout.splitlines():
+                if not line.startswith("  "):
+                    section = line
+                elif section == "Required Arguments:":
+                    required.append(line.split(":")[0].strip())
+            self.assertEqual([arg for arg in required if arg in with_default], [],
+                             name + " lists arguments with a default as required:\n" + run.stdout)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 """Prints the P3-DX robot description with the laser where calibration.yaml puts it.
 
     rosrun ekf_slam p3dx_description CALIBRATION_YAML [URDF]
+    rosrun ekf_slam p3dx_description --no-laser [URDF]
 
 URDF defaults to config/p3dx.urdf of this package. The joint `laser_joint`
 gets the x, y, z and yaw of the calibration file, and its child link the
@@ -10,6 +11,11 @@ mount that SLAM and the simulator read: config/calibration.yaml stays the
 only place that holds it. Exit status 1, with a message naming the file and
 the key, when the calibration is missing, malformed or names a parent frame
 other than the description's root.
+
+--no-laser leaves out the laser (laser_joint and its link): for a bag
+replay, whose base_link -> laser is the recorded robot's and comes from the
+bag, so that robot_state_publisher adds the body without a second,
+different mount.
 """
 import math
 import os
@@ -68,7 +74,26 @@ def describe(urdf_path, mount):
     return ElementTree.tostring(robot, encoding="unicode")
 
 
+def without_laser(urdf_path):
+    """The URDF text without laser_joint and its child link."""
+    tree = ElementTree.parse(urdf_path)
+    robot = tree.getroot()
+    joint = robot.find("joint[@name='laser_joint']")
+    if joint is None:
+        raise ValueError("%s: no joint named laser_joint" % urdf_path)
+    child = joint.find("child").get("link")
+    robot.remove(joint)
+    for link in robot.findall("link[@name='%s']" % child):
+        robot.remove(link)
+    if robot.find("joint/parent[@link='%s']" % child) is not None:
+        raise ValueError("%s: links hang below %s; cannot leave it out" % (urdf_path, child))
+    return ElementTree.tostring(robot, encoding="unicode")
+
+
 def main(argv):
+    no_laser = len(argv) > 1 and argv[1] == "--no-laser"
+    if no_laser:
+        argv = argv[:1] + [None] + argv[2:]
     if len(argv) not in (2, 3) or argv[1] in ("-h", "--help"):
         sys.stderr.write(__doc__)
         return 1
@@ -79,7 +104,7 @@ def main(argv):
         default_urdf = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "p3dx.urdf")
     urdf_path = argv[2] if len(argv) == 3 else default_urdf
     try:
-        text = describe(urdf_path, load_mount(argv[1]))
+        text = without_laser(urdf_path) if no_laser else describe(urdf_path, load_mount(argv[1]))
     except (ValueError, OSError, ElementTree.ParseError) as error:
         sys.stderr.write("p3dx_description: %s\n" % error)
         return 1

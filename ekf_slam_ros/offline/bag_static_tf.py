@@ -1,0 +1,59 @@
+#!/usr/bin/python3
+"""Republishes every static transform of a bag, latched, for a replay.
+
+    rosrun ekf_slam bag_static_tf.py BAG
+
+Reads each /tf_static message of BAG (tf2_msgs/TFMessage) and publishes all
+their transforms at once on /tf_static with tf2_ros's static broadcaster,
+then keeps them latched until it is stopped. A bag written without the
+latching flag gives its robot's frames (base_link -> laser) only to the
+subscribers present when `rosbag play` reaches that message; rviz, or any
+node started later, would never get them. Where the bag holds the same child
+frame more than once, the last one in the file wins, as it would for a tf2
+listener. Exit status 1, naming the bag, when it cannot be read; a bag
+without /tf_static is reported and nothing is published.
+"""
+import sys
+
+import rosbag
+import rospy
+import tf2_ros
+
+
+def static_transforms(path):
+    """Every transform on /tf_static of the bag at `path`, one per child frame
+    (the last written), in the order the child frames first appear."""
+    by_child = {}
+    with rosbag.Bag(path) as bag:
+        for _topic, message, _stamp in bag.read_messages(topics=["/tf_static"]):
+            for transform in message.transforms:
+                by_child[transform.child_frame_id] = transform
+    return list(by_child.values())
+
+
+def main():
+    argv = rospy.myargv(sys.argv)
+    if len(argv) != 2 or argv[1] in ("-h", "--help"):
+        sys.stderr.write(__doc__)
+        return 1
+    try:
+        transforms = static_transforms(argv[1])
+    except (OSError, rosbag.ROSBagException) as error:
+        sys.stderr.write("bag_static_tf: %s: %s\n" % (argv[1], error))
+        return 1
+    rospy.init_node("bag_static_tf")
+    if not transforms:
+        rospy.logwarn("bag_static_tf: %s holds no /tf_static: nothing to republish", argv[1])
+    else:
+        broadcaster = tf2_ros.StaticTransformBroadcaster()
+        broadcaster.sendTransform(transforms)
+        rospy.loginfo("bag_static_tf: %d static transform(s) of %s latched on /tf_static: %s",
+                      len(transforms), argv[1],
+                      ", ".join("%s -> %s" % (t.header.frame_id, t.child_frame_id)
+                                for t in transforms))
+    rospy.spin()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
