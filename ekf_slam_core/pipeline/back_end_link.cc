@@ -63,21 +63,27 @@ void BackEndLink::trackKeyScans() {
 // updates then agree with the closed loop instead of pulling the robot back
 // to the drifted map.
 std::vector<std::pair<int, Pose2>> BackEndLink::reanchorCorrections(const EkfSlam& filter) {
+  std::vector<std::pair<int, Pose2>> corrections = landmarkCorrections(filter);
   const BackEndView& view = *view_;
-  std::vector<Pose2> key_map(key_filtered_.size());
   for (size_t k = 0; k < key_filtered_.size(); ++k) {
-    key_map[k] = compose(*map_from_graph_, view.key_poses[k]);
+    key_filtered_[k] = compose(*map_from_graph_, view.key_poses[k]);
   }
+  return corrections;
+}
+
+std::vector<std::pair<int, Pose2>> BackEndLink::landmarkCorrections(const EkfSlam& filter) const {
   std::vector<std::pair<int, Pose2>> corrections;
+  if (!view_ || !map_from_graph_) return corrections;
+  const BackEndView& view = *view_;
   corrections.reserve(filter.landmarks().size());
   for (const LandmarkInfo& info : filter.landmarks()) {
     const auto it = landmark_scan_.find(info.id);
     if (it == landmark_scan_.end()) continue;
     const int k = view.keyAtOrBefore(it->second);
-    if (k < 0) continue;
-    corrections.emplace_back(info.id, compose(key_map[k], inverse(key_filtered_[k])));
+    if (k < 0 || k >= static_cast<int>(key_filtered_.size())) continue;
+    const Pose2 key_map = compose(*map_from_graph_, view.key_poses[k]);
+    corrections.emplace_back(info.id, compose(key_map, inverse(key_filtered_[k])));
   }
-  key_filtered_ = std::move(key_map);
   return corrections;
 }
 

@@ -44,6 +44,9 @@ class BackEndLink {
   // the transform that takes that key scan from where the filter had it to
   // where the graph has it now. The key scans are taken as re-anchored.
   std::vector<std::pair<int, Pose2>> reanchorCorrections(const EkfSlam& filter);
+  // The same transforms, the key scans left as they are: where re-anchoring
+  // would move each landmark now (for drawing the map in the graph's frame).
+  std::vector<std::pair<int, Pose2>> landmarkCorrections(const EkfSlam& filter) const;
 
   // The history dropped its records before `first_record`: so are the
   // loop scans that hang off them, and the landmarks `filter` no longer holds.

@@ -5,6 +5,7 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "ekf_slam_core/pipeline/loop_closed_map.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_ros/slam_node/slam_messages.h"
 #include "ros_conversions/pose_conversion.h"
@@ -62,9 +63,11 @@ void ScanOutputs::publishScan(const ScanResult& result, const Pose2& odometry,
 
   if (result.outcome != ScanOutcome::kIterated) return;
   if (landmarks_publisher_.getNumSubscribers() > 0) {
-    landmarks_publisher_.publish(landmarkMarkers(pipeline.filter(), pipeline.lineSupport(),
-                                                 &result.iteration, map_header,
-                                                 params_.ellipse_probability));
+    // Drawn where the loop-closed estimate puts them, as the grid and the
+    // pose are, not in the filter's frame.
+    const LoopClosedMap map = loopClosedMap(pipeline, result.causal_pose);
+    landmarks_publisher_.publish(landmarkMarkers(map.filter, map.support, &result.iteration,
+                                                 map_header, params_.ellipse_probability));
   }
   publishLandmarkMap(
       toLandmarkMapFile(pipeline.filter(), pipeline.lineSupport(), map_header.frame_id),
