@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The nodes refuse bad parameters at start-up.
+"""The nodes refuse bad parameters at start-up, and ekf_slam_node takes a
+good initial_map's grid.
 
 ekf_slam_node and feature_node, the two drivers (p3dx_driver_node,
 lms200_node) and simulator_node, which share the same parameter reader.
@@ -9,8 +10,10 @@ configuration file) against the rostest roscore and asserts that it exits
 with code 1 and that its error names the offending key.
 """
 import os
+import signal
 import subprocess
 import tempfile
+import time
 import unittest
 
 import rostest
@@ -106,6 +109,71 @@ class BadParameters(unittest.TestCase):
     def test_unreadable_initial_map_is_reported(self):
         self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",
                    "_initial_map:=/nonexistent/landmarks.yaml")
+
+    def test_a_bad_start_pose_names_the_key(self):
+        self.check("ekf_slam_node", "initial_cov_xx", "_initial_cov_xx:=-1.0")
+        self.check("ekf_slam_node", "initial_pose_a", "_initial_pose_a:=100.0")
+
+    def test_a_broken_grid_beside_initial_map_is_reported(self):
+        folder = tempfile.mkdtemp(prefix="ekf_slam_initial_map_")
+        path = write_map_set(folder)
+        with open(os.path.join(folder, "lab_grid.pgm"), "wb") as f:
+            f.write(b"P5\n4 3\n255\n\x00")  # cut short
+        self.check("ekf_slam_node", "lab_grid", "_initial_map:=" + path)
+
+    def test_the_grid_beside_initial_map_goes_on_map(self):
+        import rospy
+        from nav_msgs.msg import MapMetaData, OccupancyGrid
+        folder = tempfile.mkdtemp(prefix="ekf_slam_initial_map_")
+        path = write_map_set(folder)
+        rospy.init_node("initial_map_check", anonymous=True)
+        received = {}
+        rospy.Subscriber("map", OccupancyGrid, lambda m: received.setdefault("map", m))
+        rospy.Subscriber("map_metadata", MapMetaData, lambda m: received.setdefault("info", m))
+        node = subprocess.Popen(["rosrun", "ekf_slam", "ekf_slam_node", "__name:=initial_map_node",
+                                 "_initial_map:=" + path, "_localize_only:=true",
+                                 "_initial_pose_x:=1.0", "_initial_cov_xx:=0.25"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            deadline = time.time() + 30.0
+            while len(received) < 2 and time.time() < deadline and node.poll() is None:
+                time.sleep(0.1)
+        finally:
+            node.send_signal(signal.SIGINT)  # a clean shutdown flushes the log
+            output = node.communicate(timeout=30)[0]
+        self.assertIn("map", received, "no grid on map:\n" + output)
+        grid = received["map"]
+        self.assertEqual((grid.info.width, grid.info.height), (4, 3))
+        self.assertAlmostEqual(grid.info.resolution, 0.1, places=6)
+        self.assertAlmostEqual(grid.info.origin.position.x, -1.0)
+        self.assertAlmostEqual(grid.info.origin.position.y, 2.0)
+        # The image's top row is the grid's last (map_server's convention).
+        self.assertEqual(list(grid.data), GRID_VALUES)
+        self.assertEqual(received["info"].width, 4)
+        self.assertIn("starts at (1.000 m", output)
+
+
+# A 4 x 3 grid at 0.1 m, origin (-1, 2): its PGM rows top to bottom, and the
+# nav_msgs values map_server gives them (bottom row first): 0 (black) is
+# occupied, 254 free, 205 unknown.
+PGM_ROWS = [[0, 254, 205, 254], [254, 254, 254, 0], [205, 205, 0, 254]]
+GRID_VALUES = [-1, -1, 100, 0, 0, 0, 0, 100, 100, 0, -1, 0]
+
+
+def write_map_set(folder):
+    """A map set as ~save_map writes it (one landmark, a grid); returns the
+    landmark file's path."""
+    path = os.path.join(folder, "lab.yaml")
+    with open(path, "w") as f:
+        f.write("version: 2\nframe: map\ncount: 1\nlandmarks:\n"
+                "  - {id: 3, x: 0.5, y: 2.1, covariance: [0.0004, 0.0, 0.0, 0.0004], "
+                "observations: 7}\nlines: []\nline_angles: []\n")
+    with open(os.path.join(folder, "lab_grid.pgm"), "wb") as f:
+        f.write(b"P5\n4 3\n255\n" + bytes(v for row in PGM_ROWS for v in row))
+    with open(os.path.join(folder, "lab_grid.yaml"), "w") as f:
+        f.write("image: lab_grid.pgm\nresolution: 0.1\norigin: [-1.0, 2.0, 0.0]\nnegate: 0\n"
+                "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    return path
 
     # The drivers read their parameters with the same reader: a wrong type
     # is an error, not a silent default.

@@ -1,11 +1,15 @@
 #include "ekf_slam_ros/slam_node/slam_node.h"
 
+#include <unistd.h>
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <stdexcept>
 
+#include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_core/io/map_set.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
+#include "ekf_slam_ros/conversions/grid_conversion.h"
 
 namespace ekf_slam {
 namespace {
@@ -20,6 +24,18 @@ std::optional<LandmarkMapFile> initialMap(const SlamNodeParams& params) {
   ROS_INFO("ekf_slam_node: %zu landmarks from %s%s", map.landmarks.size(),
            params.initial_map.c_str(), params.localize_only ? " (localisation only)" : "");
   return map;
+}
+
+// The grid saved beside initial_map, if there is one (a bad one stops the
+// node; initialMap has completed an interrupted save of the set).
+std::optional<GridMapFile> initialGrid(const SlamNodeParams& params) {
+  if (params.initial_map.empty()) return std::nullopt;
+  const std::string path = mapSetPaths(params.initial_map).grid;
+  if (::access(path.c_str(), F_OK) != 0) return std::nullopt;
+  GridMapFile grid;
+  const std::string error = readGridMap(path, &grid);
+  if (!error.empty()) throw std::runtime_error("initial_map: " + error);
+  return grid;
 }
 
 // The laser pose the pipeline starts with, when known before the first
@@ -77,6 +93,26 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
                                                    drops_, input_.topic())),
       diagnostics_(node, private_node, params_, config_.pipeline,
                    {this, &drops_, &transforms_, &input_, rear_.get(), &grids_, &services_}) {
+  // The saved grid stays on `map` while localising; when mapping, the live
+  // grid replaces it.
+  if (const std::optional<GridMapFile> grid = initialGrid(params_)) {
+    std_msgs::Header header;
+    header.stamp = ros::Time::now();
+    header.frame_id = params_.map_frame;
+    grids_.publish(ros_conversions::toOccupancyGridMessage(*grid, header));
+    grids_.hold(localize_only_);
+  }
+  const Pose2 start(params_.initial_pose_x, params_.initial_pose_y, params_.initial_pose_a);
+  const Matrix3 covariance =
+      Vector3(params_.initial_cov_xx, params_.initial_cov_yy, params_.initial_cov_aa).asDiagonal();
+  if (start.translation().norm() > 0.0 || start.theta != 0.0 || !covariance.isZero()) {
+    const std::string error = setStartPose(start, covariance);
+    if (!error.empty()) throw std::runtime_error("initial_pose: " + error);
+    ROS_INFO(
+        "ekf_slam_node: starts at (%.3f m, %.3f m, %.2f deg), sigma (%.3f m, %.3f m, %.2f deg)",
+        start.x, start.y, radToDeg(start.theta), std::sqrt(params_.initial_cov_xx),
+        std::sqrt(params_.initial_cov_yy), radToDeg(std::sqrt(params_.initial_cov_aa)));
+  }
   if (params_.map_update_interval > 0.0 && !liveMap(params_, config_)) {
     ROS_INFO(
         "ekf_slam_node: no live grid on `map`: features carry no readings and loop closure "

@@ -65,14 +65,19 @@ struct SlamNodeParams {
   bool localize_only = false;         // start without adding landmarks
   bool start_paused = false;          // drop scans until ~resume (a recorder can start first)
   std::string initial_map;            // landmark map file loaded at start ("" none)
-  double diagnostic_period = 1.0;     // s
-  int path_max_poses = 10000;         // newest poses in `path` (0: all)
+  // Where the robot stands at start, in the map frame, and how sure that
+  // is (variances; amcl's names): the first scan's pose.
+  double initial_pose_x = 0.0, initial_pose_y = 0.0, initial_pose_a = 0.0;  // m, m, rad
+  double initial_cov_xx = 0.0, initial_cov_yy = 0.0, initial_cov_aa = 0.0;  // m², m², rad²
+  double diagnostic_period = 1.0;                                           // s
+  int path_max_poses = 10000;  // newest poses in `path` (0: all)
   // Newest scans whose history ~smooth re-solves (0: every scan, memory
   // then grows with the run). Older scans live on in the key scans (loop
   // closure on) or in an occupancy grid of their own (off).
   int history_max_scans = 10000;
   // s between occupancy grids on `map`, built in the background from the
-  // loop-closed key scans (0: only on ~smooth). Needs loop closure on.
+  // loop-closed key scans, or without loop closure from the scans (0: only
+  // on ~smooth).
   double map_update_interval = 5.0;
   // s: a scan stamped further ahead of the clock (ros::Time::now(), sim
   // time included) is refused and counted, and never becomes the reference.
@@ -112,6 +117,12 @@ struct SlamNodeParams {
     v.flag("localize_only", localize_only);
     v.flag("start_paused", start_paused);
     v.text("initial_map", initial_map, {});
+    v.number("initial_pose_x", initial_pose_x, Bounds::closed(-1e6, 1e6, "m"));
+    v.number("initial_pose_y", initial_pose_y, Bounds::closed(-1e6, 1e6, "m"));
+    v.number("initial_pose_a", initial_pose_a, Bounds::closed(-2.0 * kPi, 2.0 * kPi, "rad"));
+    v.number("initial_cov_xx", initial_cov_xx, Bounds::closed(0.0, 1e6, "m²"));
+    v.number("initial_cov_yy", initial_cov_yy, Bounds::closed(0.0, 1e6, "m²"));
+    v.number("initial_cov_aa", initial_cov_aa, Bounds::closed(0.0, 100.0, "rad²"));
     v.number("diagnostic_period", diagnostic_period, Bounds::closed(0.01, 60.0, "s"));
     v.integer("path_max_poses", path_max_poses, Bounds::closed(0, 100000000, "poses"));
     v.integer("history_max_scans", history_max_scans, Bounds::closed(0, 100000000, "scans"));
