@@ -95,11 +95,14 @@ void ScannerLink::connect() {
     std::this_thread::sleep_for(std::min<Clock::duration>(next_attempt_ - now, seconds(0.1)));
     return;
   }
-  next_attempt_ = now + seconds(options_.reconnect_delay);
   if (!port_.open(options_.port, 9600)) {
+    // No device yet (an adapter still unplugged): opening is harmless, so
+    // look again soon and catch the replug within 0.2 s.
+    next_attempt_ = now + seconds(std::min(options_.reconnect_delay, 0.2));
     setError(port_.error());
     return;
   }
+  next_attempt_ = now + seconds(options_.reconnect_delay);
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_.state = LinkState::kInitialising;

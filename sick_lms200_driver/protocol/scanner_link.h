@@ -40,7 +40,7 @@ struct LinkOptions {
   std::string port = "/dev/ttyUSB0";
   SessionOptions session;
   double time_offset = 0.0;      // s, added to every estimated first-beam time
-  double reconnect_delay = 1.0;  // s between failed connection attempts
+  double reconnect_delay = 1.0;  // s between failed initialisations (absent device: 0.2 s)
   double data_timeout = 1.0;     // s without a valid scan before re-initialising
   bool filter_stamps = true;     // remove host read delays (see StampFilter)
 };

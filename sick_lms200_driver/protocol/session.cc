@@ -130,15 +130,20 @@ bool Session::probeBaud() {
   for (int baud : options_.probe_bauds) {
     if (baud != options_.baud) order.push_back(baud);
   }
+  // A reply to the request at one rate can come late, after the host has
+  // moved on to the next: a second request at the new rate confirms it.
+  const auto answers = [this](milliseconds wait, int attempts) {
+    Telegram reply;
+    return transact(cmd::kModeChange, {mode::kRequestOnly}, &reply, waitFor(wait), attempts);
+  };
   for (int round = 0; round < 2; ++round) {
     for (int baud : order) {
       if (!set_host_baud_(baud)) continue;  // e.g. 500000 not settable here
       current_baud_ = baud;
       decoder_.reset();
-      Telegram reply;
-      if (transact(cmd::kModeChange, {mode::kRequestOnly}, &reply, waitFor(milliseconds(150)), 1)) {
-        return true;
-      }
+      // The likely rate gets the full reply time; the others a short look.
+      const milliseconds wait = baud == options_.baud ? options_.reply_timeout : milliseconds(150);
+      if (answers(wait, 1) && answers(options_.reply_timeout, options_.attempts)) return true;
       if (error_.find("closed") != std::string::npos) return false;
     }
   }

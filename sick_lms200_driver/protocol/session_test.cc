@@ -220,6 +220,31 @@ TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
   EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
 }
 
+// A reply that arrives after the host has moved to another rate (late for
+// the rate it answered) must not be taken for the sensor's rate: the probe
+// confirms with a second request, which a silent sensor leaves unanswered.
+TEST(Session, DoesNotTakeALateReplyForTheSensorsRate) {
+  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_late");
+  emulator.locked([](Lms200Emulator& e, auto&) {
+    e.setSilent(true);
+    return 0;
+  });
+  std::vector<uint8_t> late{kAck};
+  const std::vector<uint8_t> reply = encodeTelegram(
+      kSensorAddress, static_cast<uint8_t>(cmd::kModeChange + kReplyOffset), {0x00, 0x10});
+  late.insert(late.end(), reply.begin(), reply.end());
+  serial_io::SerialPort port;
+  ASSERT_TRUE(port.open(emulator.device(), 9600));
+  emulator.sendAsSensor(late);
+  TelegramDecoder decoder(kSensorAddress);
+  SessionOptions options;
+  options.probe_bauds = {9600, 38400};
+  Session session(
+      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
+  EXPECT_FALSE(session.initialize());
+  EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
+}
+
 TEST(Session, RejectsImpossibleOptionsNamingTheField) {
   SessionOptions options;
   options.angle_deg = 180;

@@ -57,6 +57,11 @@ class EmulatorOnPty {
     return f(*emulator_, truths_);
   }
   std::string device() const { return pty_.devicePath(); }
+  // Puts bytes on the line as if the sensor had sent them.
+  void sendAsSensor(const std::vector<uint8_t>& bytes) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    EXPECT_EQ(pty_.write(bytes.data(), bytes.size()), serial_io::IoStatus::kOk);
+  }
 
  private:
   ekf_slam::sim::PolygonWorld world_;
