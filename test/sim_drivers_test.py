@@ -35,6 +35,10 @@ MIN_SCAN_RATE = 8.0           # Hz; 9.38 Hz expected at 38400 baud
 LASER_X = 0.160               # m, config/calibration.yaml
 GOAL_TOLERANCE = 0.15         # m, waypoint_driver default
 DRIFT_ALLOWANCE = 0.25        # m, odometry drift over one ~9 m lap with the default wheel noise
+# m past the goal tolerance where the robot may stop: 0.05 on an idle
+# machine; beside two busy loops the driver's stop came a cycle or two late
+# (0.068 m past it).
+OVERSHOOT = 0.10
 ROBOT_RADIUS = 0.26           # m, config/simulator.yaml
 
 
@@ -222,9 +226,10 @@ class SimDriversTest(unittest.TestCase):
         with listener.lock:
             odom = list(listener.odom)
             truth_end = listener.truth[-1][1]
-        # The driver follows odom: odom is at the goal.
+        # The driver follows odom: odom is at the goal, give or take the
+        # control cycles a loaded machine delays the stop by (OVERSHOOT).
         self.assertLess(math.hypot(odom[-1][0] - goal[0], odom[-1][1] - goal[1]),
-                        GOAL_TOLERANCE + 0.05)
+                        GOAL_TOLERANCE + OVERSHOOT)
         travelled = sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(odom, odom[1:]))
         rospy.loginfo("odometry path length %.2f m", travelled)
         self.assertGreater(travelled, 7.0, "the loop is about 9 m")
