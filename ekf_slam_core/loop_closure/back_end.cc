@@ -1,6 +1,7 @@
 #include "ekf_slam_core/loop_closure/back_end.h"
 
 #include <algorithm>
+#include <string>
 #include <utility>
 
 namespace ekf_slam {
@@ -126,6 +127,26 @@ std::shared_ptr<const BackEndView> LoopClosureBackEnd::addScan(double stamp, con
   done_.wait(lock, [this, target] { return processed_ >= target; });
   while (views_.size() > 1 && views_[1]->scans <= target) views_.pop_front();
   return views_.front();
+}
+
+std::string LoopClosureBackEnd::resume(const LoopCloserState& state) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, [this] { return inputs_.empty() && !busy_; });
+  const std::string error = closer_.resume(state);
+  if (!error.empty()) return error;
+  // The restored scans count as handed and processed; publish() counts the
+  // last of them and makes the view of the restored graph.
+  handed_ = state.scan_count;
+  processed_ = state.scan_count - 1;
+  key_count_ = -1;
+  views_.clear();
+  publish();
+  return "";
+}
+
+std::shared_ptr<const BackEndView> LoopClosureBackEnd::newestView() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return views_.back();
 }
 
 long LoopClosureBackEnd::backlog() const {

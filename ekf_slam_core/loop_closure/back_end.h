@@ -22,6 +22,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -76,6 +77,13 @@ class LoopClosureBackEnd {
 
   // Scans handed over that the back end has not processed yet.
   long backlog() const;
+
+  // Continues from a saved closer (LoopCloser::resume), once the scans
+  // handed so far are processed: the next scan is state.scan_count. Empty
+  // on success, else what is inconsistent in `state`.
+  std::string resume(const LoopCloserState& state);
+  // The view of everything processed so far.
+  std::shared_ptr<const BackEndView> newestView() const;
 
   // Waits until every scan handed over has been processed, then gives the
   // LoopCloser itself. Its use must end before the next addScan.

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <queue>
+#include <string>
 #include <unordered_set>
 
 namespace ekf_slam {
@@ -588,6 +589,102 @@ void LoopCloser::finish() {
     final_problem_ = graph_;
     optimise();
   }
+}
+
+LoopCloserState LoopCloser::state() const {
+  LoopCloserState out;
+  out.keys.reserve(keys_.size());
+  for (const KeyScan& key : keys_) {
+    LoopCloserState::Key k;
+    k.front_end = key.front_end;
+    k.points = *key.points;
+    k.travel_from_previous = key.travel_from_previous;
+    k.retry_after = key.retry_after;
+    k.scan_index = key.scan_index;
+    k.stamp = key.stamp;
+    k.wall_direction = key.wall_direction;
+    out.keys.push_back(std::move(k));
+  }
+  out.graph = graph_;
+  out.adjacency = adjacency_;
+  out.heading_edges.assign(heading_edges_.begin(), heading_edges_.end());
+  std::sort(out.heading_edges.begin(), out.heading_edges.end());
+  out.counters = counters_;
+  out.scan_count = scanCount();
+  out.next_attempt = next_attempt_;
+  out.heading_loops_since_optimisation = heading_loops_since_optimisation_;
+  if (hypothesis_) {
+    out.has_hypothesis = true;
+    out.hypothesis_from = hypothesis_->from;
+    out.hypothesis_to = hypothesis_->to;
+    out.hypothesis_relative = hypothesis_->relative;
+  }
+  return out;
+}
+
+std::string LoopCloser::resume(const LoopCloserState& state) {
+  const int keys = static_cast<int>(state.keys.size());
+  const auto is_key = [keys](int k) { return k >= 0 && k < keys; };
+  if (state.graph.nodeCount() != keys) {
+    return "the graph has " + std::to_string(state.graph.nodeCount()) + " nodes for " +
+           std::to_string(keys) + " key scans";
+  }
+  if (static_cast<int>(state.adjacency.size()) != keys) {
+    return "the graph distances list " + std::to_string(state.adjacency.size()) +
+           " key scans, not " + std::to_string(keys);
+  }
+  for (const PoseGraphEdge& edge : state.graph.edges()) {
+    if (!is_key(edge.from) || !is_key(edge.to)) return "a graph edge joins a missing key scan";
+  }
+  for (const auto& neighbours : state.adjacency) {
+    for (const auto& [next, travel] : neighbours) {
+      if (!is_key(next) || !(travel >= 0.0)) return "a graph distance names a missing key scan";
+    }
+  }
+  const int edges = static_cast<int>(state.graph.edges().size());
+  for (int e : state.heading_edges) {
+    if (e < 0 || e >= edges) return "a heading edge names a missing graph edge";
+  }
+  if (state.has_hypothesis && (!is_key(state.hypothesis_from) || !is_key(state.hypothesis_to))) {
+    return "the pending loop names a missing key scan";
+  }
+  int last_scan = -1;
+  for (const LoopCloserState::Key& k : state.keys) {
+    if (k.scan_index <= last_scan || k.scan_index >= state.scan_count) {
+      return "the key scans' scan numbers are not increasing below the scan count";
+    }
+    last_scan = k.scan_index;
+  }
+  keys_.clear();
+  keys_.reserve(keys);
+  for (const LoopCloserState::Key& k : state.keys) {
+    KeyScan key;
+    key.front_end = k.front_end;
+    key.points = std::make_shared<const std::vector<Vector2>>(k.points);
+    // As addKeyScan thins them (a released key scan has none).
+    key.sparse = thinned(k.points, options_.search_point_spacing);
+    key.travel_from_previous = k.travel_from_previous;
+    key.retry_after = k.retry_after;
+    key.scan_index = k.scan_index;
+    key.stamp = k.stamp;
+    key.wall_direction = k.wall_direction;
+    keys_.push_back(std::move(key));
+  }
+  graph_ = state.graph;
+  final_problem_ = PoseGraph();
+  adjacency_ = state.adjacency;
+  distances_from_ = -1;
+  heading_edges_ = std::unordered_set<int>(state.heading_edges.begin(), state.heading_edges.end());
+  counters_ = state.counters;
+  scans_.clear();
+  first_scan_ = state.scan_count;
+  next_attempt_ = state.next_attempt;
+  heading_loops_since_optimisation_ = state.heading_loops_since_optimisation;
+  hypothesis_.reset();
+  if (state.has_hypothesis) {
+    hypothesis_ = Hypothesis{state.hypothesis_from, state.hypothesis_to, state.hypothesis_relative};
+  }
+  return "";
 }
 
 Pose2 LoopCloser::latestPose() const {

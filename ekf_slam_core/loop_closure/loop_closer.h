@@ -263,6 +263,35 @@ double explainedStructure(const std::vector<Vector2>& query, const PointCloudRef
 double wallDirection(const std::vector<Vector2>& points, const ScanMatcherOptions& options,
                      double* concentration, int* normals);
 
+// What a later run continues from (a saved SLAM state,
+// pipeline/slam_state.h): the key scans with their readings, the graph with
+// its loops and heading edges, and the loop search's bookkeeping. Not the
+// per-scan entries: the scans of a resumed run hang off the restored key
+// scans.
+struct LoopCloserState {
+  struct Key {
+    Pose2 front_end;                    // front-end pose when it was taken
+    std::vector<Vector2> points;        // robot frame; empty when released
+    double travel_from_previous = 0.0;  // m
+    int retry_after = 0;
+    int scan_index = -1;  // of its scan, in addScan order
+    double stamp = 0.0;
+    double wall_direction = std::numeric_limits<double>::quiet_NaN();
+  };
+  std::vector<Key> keys;
+  PoseGraph graph;
+  // Per key scan: its neighbours in graph distance and the travel to each.
+  std::vector<std::vector<std::pair<int, double>>> adjacency;
+  std::vector<int> heading_edges;  // graph edge indices, ascending
+  LoopClosureCounters counters;
+  int scan_count = 0;  // scans given to addScan
+  int next_attempt = 0;
+  int heading_loops_since_optimisation = 0;
+  bool has_hypothesis = false;  // a wide-window loop awaiting confirmation
+  int hypothesis_from = 0, hypothesis_to = 0;
+  Pose2 hypothesis_relative;
+};
+
 class LoopCloser {
  public:
   // `matcher` gives the ICP settings (normals, gates, point noise) of the front end.
@@ -289,6 +318,13 @@ class LoopCloser {
 
   // Final optimisation: drops the loops the kernel rejects, re-optimises.
   void finish();
+
+  // A snapshot to continue from, and the continuation: resume() replaces
+  // everything this closer holds (on a closer built with the same options)
+  // and numbers the next scan state.scan_count. Empty on success, else what
+  // is inconsistent in `state` (the closer is then unchanged).
+  LoopCloserState state() const;
+  std::string resume(const LoopCloserState& state);
 
   // One pose per scan given to addScan and still kept (scans firstScan() to
   // scanCount() − 1), in the map frame of the first key scan.

@@ -21,9 +21,16 @@ std::unique_ptr<LoopClosureBackEnd> backEndFor(const PipelineOptions& options) {
 BackEndLink::BackEndLink(const PipelineOptions& options)
     : laser_pose_(options.filter.laser_pose), back_end_(backEndFor(options)) {}
 
-BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pose2& odometry,
+BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pose2& new_odometry,
                                        bool usable, const Pose2& filtered, long record,
                                        const std::vector<int>& new_landmarks) {
+  if (resume_at_) {
+    front_end_offset_ = compose(*resume_at_, inverse(new_odometry));
+    resume_at_.reset();
+  }
+  const Pose2 odometry =
+      front_end_offset_ ? compose(*front_end_offset_, new_odometry) : new_odometry;
+  last_front_end_ = odometry;
   const int loop_scan = first_loop_scan_ + static_cast<int>(record_of_loop_scan_.size());
   record_of_loop_scan_.push_back(record);
   pending_filtered_.push_back(filtered);
@@ -103,6 +110,49 @@ void BackEndLink::forgetBefore(long first_record, const EkfSlam& filter) {
   }
 }
 
+BackEndLinkState BackEndLink::state() const {
+  BackEndLinkState out;
+  if (!back_end_) return out;
+  const LoopCloser& closer = back_end_->drained();
+  out.closer = closer.state();
+  // The filter's pose at the key scans the last view did not report yet.
+  out.key_filtered = key_filtered_;
+  for (int k = static_cast<int>(key_filtered_.size()); k < closer.keyCount(); ++k) {
+    out.key_filtered.push_back(pending_filtered_[closer.keyScanIndex(k) - pending_base_]);
+  }
+  out.landmark_scan.assign(landmark_scan_.begin(), landmark_scan_.end());
+  std::sort(out.landmark_scan.begin(), out.landmark_scan.end());
+  out.has_map_from_graph = map_from_graph_.has_value();
+  if (map_from_graph_) out.map_from_graph = *map_from_graph_;
+  out.last_front_end = last_front_end_;
+  return out;
+}
+
+std::string BackEndLink::resume(const BackEndLinkState& state, bool same_frame) {
+  if (!back_end_) return "";  // loop closure off: the saved key scans are not used
+  if (state.key_filtered.size() != state.closer.keys.size()) {
+    return "the filter's poses at the key scans do not match the key scans";
+  }
+  if (const std::string error = back_end_->resume(state.closer); !error.empty()) return error;
+  view_ = back_end_->newestView();
+  loops_seen_ = view_->counters.accepted;
+  record_of_loop_scan_.clear();
+  first_loop_scan_ = state.closer.scan_count;
+  key_filtered_ = state.key_filtered;
+  pending_filtered_.clear();
+  pending_base_ = state.closer.scan_count;
+  landmark_scan_ =
+      std::unordered_map<int, int>(state.landmark_scan.begin(), state.landmark_scan.end());
+  restored_keys_ = static_cast<int>(state.closer.keys.size());
+  map_from_graph_.reset();
+  if (state.has_map_from_graph) map_from_graph_ = state.map_from_graph;
+  last_front_end_ = state.last_front_end;
+  front_end_offset_.reset();
+  resume_at_ = state.closer.keys.empty() || same_frame ? std::nullopt
+                                                       : std::optional<Pose2>(state.last_front_end);
+  return "";
+}
+
 std::vector<BackEndLink::KeyScan> BackEndLink::keyScans(bool with_points) const {
   std::vector<KeyScan> out;
   if (!view_ || !map_from_graph_) return out;
@@ -142,6 +192,25 @@ std::vector<IterationConstraint> BackEndLink::loopConstraints(const ScanHistory&
     if (!edge.robust || !edge.active) continue;  // sequential edge, or a dropped loop
     const ScanRecord* from = recordOf(closer.keyScanIndex(edge.from));
     const ScanRecord* to = recordOf(closer.keyScanIndex(edge.to));
+    // A loop to a key scan of a resumed state: that key scan stays where
+    // the graph has it, and the loop places the new end in the map frame.
+    const bool from_saved = edge.from < restored_keys_ && to != nullptr;
+    const bool to_saved = edge.to < restored_keys_ && from != nullptr;
+    if ((from_saved || to_saved) && map_from_graph_ && !(from_saved && to_saved)) {
+      const ScanRecord& b = from_saved ? *to : *from;
+      if (b.iteration < first_iteration) continue;
+      const Pose2 saved =
+          compose(*map_from_graph_, closer.graph().pose(from_saved ? edge.from : edge.to));
+      IterationConstraint c;
+      c.from_iteration = IterationConstraint::kMapFrame;
+      c.to_iteration = b.iteration - first_iteration;
+      c.to_offset = between(b.odometry_at_iteration, b.odometry);
+      c.measurement =
+          from_saved ? compose(saved, edge.measurement) : compose(saved, inverse(edge.measurement));
+      c.information = edge.information;
+      out.push_back(c);
+      continue;
+    }
     if (from == nullptr || to == nullptr) continue;
     const ScanRecord& a = *from;
     const ScanRecord& b = *to;

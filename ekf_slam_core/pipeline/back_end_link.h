@@ -12,6 +12,7 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "ekf_slam_core/loop_closure/back_end.h"
 #include "ekf_slam_core/pipeline/pipeline_options.h"
 #include "ekf_slam_core/pipeline/scan_history.h"
+#include "ekf_slam_core/pipeline/slam_state.h"
 
 namespace ekf_slam {
 
@@ -66,6 +68,26 @@ class BackEndLink {
   LoopClosureCounters counters() const { return view_ ? view_->counters : LoopClosureCounters(); }
   long backlog() const { return back_end_ ? back_end_->backlog() : 0; }
 
+  // What continuing needs (slam_state.h), once the back end has processed
+  // every scan handed to it; empty without loop closure.
+  BackEndLinkState state() const;
+  // Continues from `state` before the first scan: the back end takes the
+  // saved key scans and graph, and the next scan's front-end pose is taken
+  // to be where the saved run stopped (the front end of the new run starts
+  // in a frame of its own). Empty on success, else what is inconsistent.
+  // `same_frame`: the new front end goes on in the saved one's frame (its
+  // map was restored), so no offset is needed.
+  std::string resume(const BackEndLinkState& state, bool same_frame);
+  // After resume(): the robot moved by `motion` (its frame) since the save.
+  void resumeMovedBy(const Pose2& motion) {
+    if (resume_at_) resume_at_ = compose(*resume_at_, motion);
+  }
+  // A control-source pose in the back end's front-end frame (after a
+  // resume, the saved run's).
+  Pose2 frontEndPose(const Pose2& odometry) const {
+    return front_end_offset_ ? compose(*front_end_offset_, odometry) : odometry;
+  }
+
   // The final optimisation after the last scan; then one pose per scan.
   void finish();
   std::vector<StampedPose> optimizedScanPoses() const;
@@ -107,6 +129,12 @@ class BackEndLink {
   long pending_base_ = 0;               // … on, whose key scans the back end may still report
   std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
   std::optional<Pose2> map_from_graph_;         // the graph's frame in the map frame (first scan)
+  Pose2 last_front_end_;                        // the back end's front-end pose at the last scan
+  // After a resume: where the saved run stopped (until the first scan) and
+  // then the transform from the new front end's frame to the saved one's.
+  std::optional<Pose2> resume_at_;
+  std::optional<Pose2> front_end_offset_;
+  int restored_keys_ = 0;  // key scans of a resumed state (indices below this)
 };
 
 }  // namespace ekf_slam

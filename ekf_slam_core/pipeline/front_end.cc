@@ -61,7 +61,7 @@ Pose2 FrontEnd::track(const Scan* scan, const Pose2& raw_odometry, bool usable, 
 }
 
 std::optional<Pose2> FrontEnd::localMotion() const {
-  if (!local_matcher_) return std::nullopt;
+  if (!local_matcher_ || local_motion_unknown_) return std::nullopt;
   return between(last_local_pose_, local_pose_);
 }
 

@@ -44,7 +44,10 @@ class FrontEnd {
 
   // The filter iterated (or re-anchored) at the scan last tracked: the
   // local matcher's motion is measured from here on.
-  void markIteration() { last_local_pose_ = local_pose_; }
+  void markIteration() {
+    last_local_pose_ = local_pose_;
+    local_motion_unknown_ = false;
+  }
   // The local matcher's motion since the last markIteration(); empty when
   // there is no local matcher.
   std::optional<Pose2> localMotion() const;
@@ -52,6 +55,19 @@ class FrontEnd {
   // True when the control is scan-matched (the wheels are then a separate
   // measurement for the full smoother).
   bool matchesScans() const { return scan_matcher_.has_value(); }
+
+  // The scan matcher's state to continue from (a global map only), and the
+  // continuation. After restore() the first iteration has no local motion
+  // (the local matcher starts afresh). False when there is nothing to
+  // restore into (scan matching off, a local map).
+  std::optional<ScanMatchingOdometryState> state() const {
+    return scan_matcher_ ? scan_matcher_->state() : std::nullopt;
+  }
+  bool restore(const ScanMatchingOdometryState& state) {
+    if (!scan_matcher_ || !scan_matcher_->restore(state)) return false;
+    local_motion_unknown_ = true;
+    return true;
+  }
   const FrontEndCounters& counters() const { return counters_; }
 
  private:
@@ -66,6 +82,7 @@ class FrontEnd {
   Pose2 local_pose_;       // the local matcher's pose at the scan tracked last
   Pose2 last_local_pose_;  // … and at the last iteration (or re-anchor)
   FrontEndCounters counters_;
+  bool local_motion_unknown_ = false;  // after restore(), until the next iteration
 };
 
 }  // namespace ekf_slam

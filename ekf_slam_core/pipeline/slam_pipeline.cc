@@ -27,6 +27,57 @@ Pose2 SlamPipeline::mapToOdom() const {
   return compose(filter_.filter().pose(), inverse(last_raw_odometry_));
 }
 
+SlamState SlamPipeline::state(const std::string& configuration) const {
+  SlamState out;
+  out.configuration = configuration;
+  out.laser_pose = options_.filter.laser_pose;
+  out.filter = filter_.filter().filterState();
+  out.line_support = filter_.lineSupport();
+  out.back_end = back_end_.state();
+  if (std::optional<ScanMatchingOdometryState> front_end = front_end_.state()) {
+    out.has_front_end = true;
+    out.front_end = std::move(*front_end);
+  }
+  out.scans = counters_.scans + resumed_scans_;
+  if (initialised_) {
+    // Resumed from the last iteration, where the filter's pose is.
+    out.back_end.last_front_end = back_end_.frontEndPose(last_odometry_);
+    out.has_last_iteration = true;
+    out.last_stamp = last_stamp_;
+    out.last_raw_odometry = last_raw_odometry_;
+  }
+  return out;
+}
+
+std::string SlamPipeline::resume(const SlamState& state) {
+  if (initialised_ || counters_.scans > 0) {
+    return "a saved state can be resumed only before the first scan";
+  }
+  const Pose2 mount = between(options_.filter.laser_pose, state.laser_pose);
+  if (std::hypot(mount.x, mount.y) > 0.01 || std::abs(mount.theta) > 0.5 * kPi / 180.0) {
+    std::ostringstream message;
+    message << "the state was made with the laser at (" << state.laser_pose.x << ", "
+            << state.laser_pose.y << ", " << state.laser_pose.theta
+            << ") on the robot, this configuration has it at (" << options_.filter.laser_pose.x
+            << ", " << options_.filter.laser_pose.y << ", " << options_.filter.laser_pose.theta
+            << "): another laser mount (its key scans would not fit)";
+    return message.str();
+  }
+  // The front end goes on in the saved frame when its map was saved, and
+  // the back end then needs no offset between the two runs' frames.
+  const bool same_frame = state.has_front_end && front_end_.restore(state.front_end);
+  if (const std::string error = back_end_.resume(state.back_end, same_frame); !error.empty()) {
+    front_end_ = FrontEnd(options_);
+    return error;
+  }
+  filter_.mutableFilter().restore(state.filter);
+  filter_.seedLineSupport(state.line_support);
+  resumed_scans_ = state.scans;
+  resume_from_.reset();
+  if (state.has_last_iteration) resume_from_.emplace(state.last_stamp, state.last_raw_odometry);
+  return "";
+}
+
 ScanResult SlamPipeline::processScan(const Scan& scan, const Pose2& odometry) {
   return process(scan.stamp, &scan, nullptr, odometry);
 }
@@ -65,6 +116,7 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
     rejectInput(stamp, scan, odometry, input_error, &out);
     return out;
   }
+  if (!initialised_ && resume_from_) continueFromSave(stamp, raw_odometry, odometry);
   if (!initialised_) {
     last_odometry_ = odometry;
     last_raw_odometry_ = raw_odometry;
@@ -96,6 +148,25 @@ ScanResult SlamPipeline::process(double stamp, const Scan* scan, const FeatureSe
   }
   record(stamp, scan, odometry, usable, &out);
   return out;
+}
+
+void SlamPipeline::continueFromSave(double stamp, const Pose2& raw_odometry,
+                                    const Pose2& odometry) {
+  const auto [saved_stamp, saved_raw_odometry] = *resume_from_;
+  resume_from_.reset();
+  const double gap = stamp - saved_stamp;
+  const Pose2 since = between(saved_raw_odometry, raw_odometry);
+  const bool continues =
+      gap > 0.0 && gap <= kResumeGap &&
+      !options_.filter.isJump(controlFromOdometry(saved_raw_odometry, raw_odometry));
+  if (!continues) return;  // the robot stands where the saved run stopped
+  // The saved iteration, seen from this scan through the wheels' motion: the
+  // next step predicts across it as if the run had not stopped.
+  last_odometry_ = compose(odometry, inverse(since));
+  last_raw_odometry_ = saved_raw_odometry;
+  last_stamp_ = saved_stamp;
+  initialised_ = true;
+  back_end_.resumeMovedBy(since);
 }
 
 void SlamPipeline::rejectInput(double stamp, const Scan* scan, const Pose2& odometry,

@@ -32,8 +32,10 @@
 //   from the odometry origin: no iteration, counted as bad input.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/geometry/stamped_pose.h"
@@ -43,6 +45,7 @@
 #include "ekf_slam_core/pipeline/pipeline_options.h"
 #include "ekf_slam_core/pipeline/scan_history.h"
 #include "ekf_slam_core/pipeline/scan_result.h"
+#include "ekf_slam_core/pipeline/slam_state.h"
 #include "ekf_slam_core/pipeline/smoothing_problem.h"
 
 namespace ekf_slam {
@@ -89,6 +92,18 @@ class SlamPipeline {
   // the filter take it as control; it is counted (accepted_large_moves when
   // it exceeds the jump bounds).
   void acceptNextMotion() { accept_next_motion_ = true; }
+
+  // Everything a later run needs to go on mapping (slam_state.h); waits for
+  // a back end on its own thread. `configuration`: the options as text,
+  // kept in the state for people.
+  SlamState state(const std::string& configuration = "") const;
+  // Goes on from `state`, before the first scan: the filter's map and pose,
+  // the loop closer's key scans and graph. The next scan is taken where the
+  // saved run stopped (its odometry may start anywhere: only increments
+  // count). Refused, with the reason, after the first scan, or when the
+  // laser mount differs from options.filter.laser_pose (the key scans'
+  // readings hang off it) by more than 1 cm or 0.5 degrees.
+  std::string resume(const SlamState& state);
 
   // The stages, read-only.
   const FrontEnd& frontEnd() const { return front_end_; }
@@ -167,6 +182,9 @@ class SlamPipeline {
                      const Pose2& raw_odometry);
   // Why the input cannot be used (empty: it can).
   std::string inputError(const Scan* scan, const FeatureSet* features) const;
+  // The first scan after a resume: when it continues the saved run (see
+  // SlamState::last_stamp), the last iteration becomes the saved one.
+  void continueFromSave(double stamp, const Pose2& raw_odometry, const Pose2& odometry);
   // A scan with unusable input: a dead-reckoned pose, recorded when possible.
   void rejectInput(double stamp, const Scan* scan, const Pose2& odometry,
                    const std::string& input_error, ScanResult* out);
@@ -194,6 +212,9 @@ class SlamPipeline {
   Pose2 current_raw_odometry_;       // the raw odometry of the scan being processed
   double last_stamp_ = 0.0;          // of the last iteration
   bool accept_next_motion_ = false;  // acceptNextMotion(): no jump rule at the next iteration
+  long resumed_scans_ = 0;           // scans of the runs before a resume (SlamState::scans)
+  // A resumed state's last iteration (stamp, raw odometry), until the first scan.
+  std::optional<std::pair<double, Pose2>> resume_from_;
 };
 
 }  // namespace ekf_slam

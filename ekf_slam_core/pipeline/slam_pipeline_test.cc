@@ -13,25 +13,12 @@
 #include "ekf_slam_core/sim/drive.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
 #include "ekf_slam_core/sim/polygon_world.h"
+#include "ekf_slam_core/testing/carton_room.h"
 
 namespace ekf_slam {
 namespace {
 
-// A 10 m × 7 m room with cartons: plenty of corners, as in the thesis's
-// artificially modelled environments (§5.1.2–5.1.3).
-sim::PolygonWorld cartonRoom() {
-  sim::PolygonWorld world;
-  world.addPolygon({{-2, -2}, {8, -2}, {8, 5}, {-2, 5}});
-  world.addBox({1.0, -0.9}, 0.6, 0.4);
-  world.addBox({4.0, -1.0}, 0.5, 0.5, 0.3);
-  world.addBox({6.9, 0.5}, 0.4, 0.8);
-  world.addBox({7.0, 3.5}, 0.6, 0.6, -0.4);
-  world.addBox({3.0, 4.0}, 0.8, 0.4);
-  world.addBox({-1.0, 3.8}, 0.5, 0.5, 0.5);
-  world.addBox({-1.0, 1.5}, 0.4, 0.6);
-  world.addBox({3.0, 1.5}, 1.0, 1.0);  // an island the robot drives around
-  return world;
-}
+using testing::cartonRoom;
 
 Scan scanAt(const sim::PolygonWorld& world, const Pose2& laser_in_map, double stamp,
             std::mt19937* rng) {

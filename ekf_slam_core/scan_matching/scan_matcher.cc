@@ -507,6 +507,35 @@ double ScanMatchingOdometry::odometryDisagreement(const Pose2& raw_odometry, con
   return d.dot(covariance.ldlt().solve(d));
 }
 
+std::optional<ScanMatchingOdometryState> ScanMatchingOdometry::state() const {
+  if (!initialised_ || !globalMap() || !reference_) return std::nullopt;
+  ScanMatchingOdometryState out;
+  out.last_raw = last_raw_;
+  out.last_corrected = last_corrected_;
+  out.last_key_pose = last_key_pose_;
+  out.last_stamp = last_stamp_;
+  out.map_points = reference_->points();
+  out.map_normals = reference_->normals();
+  return out;
+}
+
+bool ScanMatchingOdometry::restore(const ScanMatchingOdometryState& state) {
+  if (!globalMap() || state.map_points.size() != state.map_normals.size() ||
+      state.map_points.empty()) {
+    return false;
+  }
+  initialised_ = true;
+  consecutive_refusals_ = 0;
+  last_raw_ = state.last_raw;
+  last_corrected_ = state.last_corrected;
+  last_key_pose_ = state.last_key_pose;
+  last_stamp_ = state.last_stamp;
+  reference_.emplace(std::vector<Vector2>(), options_.normal_radius,
+                     options_.initial_correspondence_distance);
+  reference_->insert(state.map_points, state.map_normals, 0.0);
+  return true;
+}
+
 void ScanMatchingOdometry::addKeyScan(const std::vector<Vector2>& points, const Pose2& pose) {
   std::vector<Vector2> placed;
   placed.reserve(points.size());

@@ -271,6 +271,16 @@ struct ScanMatcherCounters {
 // odometry pose into a corrected one. A refused match (too few pairs, a
 // correction beyond the bounds) falls back to the odometry increment, so
 // the output is never worse than dead reckoning by more than one refusal.
+// What a later run continues from (a saved SLAM state): the corrected
+// pose, the raw odometry there, and the global map with its normals.
+struct ScanMatchingOdometryState {
+  Pose2 last_raw;
+  Pose2 last_corrected;
+  Pose2 last_key_pose;
+  double last_stamp = 0.0;
+  std::vector<Vector2> map_points, map_normals;
+};
+
 class ScanMatchingOdometry {
  public:
   // `wheel_noise`: the noise model of the raw odometry increment, for the
@@ -306,6 +316,14 @@ class ScanMatchingOdometry {
 
   const ScanMatcherCounters& counters() const { return counters_; }
   size_t mapPoints() const { return reference_ ? reference_->size() : 0; }
+
+  // The global map's matcher after its first scan: its state to continue
+  // from, else none (a local map is not kept: it refills in a few scans).
+  std::optional<ScanMatchingOdometryState> state() const;
+  // Goes on from `state`: the next scan is matched against its map, its
+  // raw odometry taken from state.last_raw (a jump when the odometry
+  // restarted: see FrontEnd). False, and nothing changed, for a local map.
+  bool restore(const ScanMatchingOdometryState& state);
 
  private:
   void addKeyScan(const std::vector<Vector2>& points, const Pose2& pose);

@@ -459,6 +459,16 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
     }
     result.constraint_edges = 0;
     for (const IterationConstraint& c : constraints) {
+      if (c.from_iteration == IterationConstraint::kMapFrame && c.to_iteration >= 0 &&
+          c.to_iteration < n) {
+        PosePriorEdge prior;
+        prior.pose = c.to_iteration;
+        prior.mean = compose(c.measurement, inverse(c.to_offset));
+        prior.information = c.information;
+        graph.addEdge(prior);
+        ++result.constraint_edges;
+        continue;
+      }
       if (c.from_iteration < 0 || c.from_iteration >= n || c.to_iteration < 0 ||
           c.to_iteration >= n) {
         continue;

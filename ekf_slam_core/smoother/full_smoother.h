@@ -192,7 +192,10 @@ struct SmootherIteration {
 
 // A relative-pose constraint between two iterations' poses, each carried by
 // a constant offset (a key scan = its iteration's pose ⊕ the odometry since).
+// from_iteration kMapFrame: a prior, `measurement` being the pose of
+// (to ⊕ to_offset) in the map frame (a loop to a key scan of a saved map).
 struct IterationConstraint {
+  static constexpr int kMapFrame = -1;
   int from_iteration = 0;
   int to_iteration = 0;
   Pose2 from_offset;

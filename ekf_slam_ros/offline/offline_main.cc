@@ -4,8 +4,9 @@
 // order, and is deterministic: the same input gives bit-identical output.
 //
 //   rosrun ekf_slam ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR
-//                                    [--config YAML] [--max-scans N] [--no-figures]
-//                                    [--trace] [--export-graphs DIR]
+//                                    [--config YAML] [--max-scans N] [--first-scan N]
+//                                    [--no-figures] [--trace] [--export-graphs DIR]
+//                                    [--save-state FILE] [--resume FILE [--localize-only]]
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt (the full
 // smoother: batch MAP over every pose, landmark and observation the filter
@@ -22,8 +23,11 @@
 // started from the front end's key-scan poses, and landmark_graph.txt, the full smoother's last
 // optimisation as it started; with pose_graph_scans.txt and landmark_graph_scans.txt, the scan
 // anchors that turn a solution into one pose per scan (as trajectory_optimized.txt and
-// trajectory_smoothed.txt are made from the run's own solutions). Exit code 0 on success, 1 on bad
-// arguments or configuration, 2 on unreadable input, 3 when the output cannot be written.
+// trajectory_smoothed.txt are made from the run's own solutions). --save-state FILE writes the
+// SLAM state after the last scan (before the final optimisation), --resume FILE goes on from one
+// (ekf_slam_core/pipeline/slam_state.h): a log mapped in parts, a building mapped over days.
+// Exit code 0 on success, 1 on bad arguments or configuration, 2 on unreadable input (a state
+// that cannot be resumed included), 3 when the output cannot be written.
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -47,6 +51,7 @@
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/io/trajectory_file.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
+#include "ekf_slam_core/pipeline/slam_state.h"
 #include "ekf_slam_core/pose_graph/graph_io.h"
 #include "ekf_slam_ros/offline/log_input.h"
 
@@ -67,8 +72,9 @@ std::string programDir() {
 
 void usage(std::ostream& out = std::cerr) {
   out << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
-         "                        [--max-scans N] [--no-figures] [--no-maps] [--trace]\n"
-         "                        [--export-graphs DIR]\n"
+         "                        [--max-scans N] [--first-scan N] [--no-figures] [--no-maps]\n"
+         "                        [--trace] [--export-graphs DIR] [--save-state FILE]\n"
+         "                        [--resume FILE [--localize-only]]\n"
          "       ekf_slam_offline [--config YAML] --print-config\n"
          "       ekf_slam_offline --help\n"
          "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
@@ -76,7 +82,12 @@ void usage(std::ostream& out = std::cerr) {
          "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
          "             no figures): the fastest run, for scoring trajectories\n"
          "  --export-graphs: the final loop-closure pose graph and the full smoother's\n"
-         "             last problem as text files in DIR (docs/solvers.md)\n";
+         "             last problem as text files in DIR (docs/solvers.md)\n"
+         "  --first-scan: leave out the log's scans before this one (counted from 0)\n"
+         "  --save-state: the SLAM state after the last scan, to go on from with --resume\n"
+         "  --resume: go on mapping from a saved state (the log's first scan is taken\n"
+         "             where the saved run stopped)\n"
+         "  --localize-only: with --resume, no landmark is added: the saved map localises\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -269,12 +280,14 @@ std::string wheelEdgesLine(const ekf_slam::WheelNoise& wheels) {
 
 // The command line.
 struct Arguments {
-  std::string bag_path, carmen_path, out_dir, config_path, export_dir;
+  std::string bag_path, carmen_path, out_dir, config_path, export_dir, save_state, resume;
   long max_scans = -1;
+  long first_scan = 0;
   bool figures = true;
   bool maps = true;
   bool trace = false;
   bool print_config = false;
+  bool localize_only = false;
 };
 
 // Returns -1 to go on, else the exit code.
@@ -293,6 +306,14 @@ int parseArguments(int argc, char** argv, Arguments* a) {
       a->config_path = argv[++i];
     } else if (arg == "--max-scans" && i + 1 < argc) {
       a->max_scans = std::atol(argv[++i]);
+    } else if (arg == "--first-scan" && i + 1 < argc) {
+      a->first_scan = std::max(0L, std::atol(argv[++i]));
+    } else if (arg == "--save-state" && i + 1 < argc) {
+      a->save_state = argv[++i];
+    } else if (arg == "--resume" && i + 1 < argc) {
+      a->resume = argv[++i];
+    } else if (arg == "--localize-only") {
+      a->localize_only = true;
     } else if (arg == "--no-figures") {
       a->figures = false;
     } else if (arg == "--no-maps") {
@@ -314,6 +335,10 @@ int parseArguments(int argc, char** argv, Arguments* a) {
   }
   if (!a->print_config && (a->out_dir.empty() || a->bag_path.empty() == a->carmen_path.empty())) {
     usage();
+    return 1;
+  }
+  if (a->localize_only && a->resume.empty()) {
+    std::cerr << "ekf_slam_offline: --localize-only needs a map to localise in: --resume FILE\n";
     return 1;
   }
   return -1;
@@ -338,6 +363,11 @@ int readInput(const Arguments& a, ekf_slam::SlamConfig* config, ekf_slam::LogDat
     log->scans.resize(a.max_scans);
     log->last_stamp = log->first_stamp;
     for (const auto& s : log->scans) log->last_stamp = std::max(log->last_stamp, s.scan.stamp);
+  }
+  if (a.first_scan > 0) {
+    const size_t drop = std::min(log->scans.size(), static_cast<size_t>(a.first_scan));
+    log->scans.erase(log->scans.begin(), log->scans.begin() + drop);
+    if (!log->scans.empty()) log->first_stamp = log->scans.front().scan.stamp;
   }
   if (!config->laser_pose_given) {
     if (!log->laser_pose_found) {
@@ -382,8 +412,12 @@ void traceScan(double stamp, const ekf_slam::ScanResult& result, std::ofstream* 
 
 // Every scan through the pipeline in file order, then the back end's final
 // optimisation.
-void runSlam(const Arguments& a, const ekf_slam::LogData& log,
-             std::chrono::steady_clock::time_point wall_start, ekf_slam::SlamPipeline* pipeline) {
+// With --save-state the state is written after the last scan, before that
+// optimisation (a later run goes on from the run as it stood): the problem
+// when it cannot be, else empty.
+std::string runSlam(const Arguments& a, const ekf_slam::SlamConfig& config,
+                    const ekf_slam::LogData& log, std::chrono::steady_clock::time_point wall_start,
+                    ekf_slam::SlamPipeline* pipeline) {
   const bool tty = ::isatty(STDERR_FILENO);
   const size_t total = log.scans.size();
   size_t next_report = 0;
@@ -403,7 +437,13 @@ void runSlam(const Arguments& a, const ekf_slam::LogData& log,
     }
   }
   if (tty) std::fprintf(stderr, "\n");
+  std::string error;
+  if (!a.save_state.empty()) {
+    error = ekf_slam::writeSlamState(a.save_state,
+                                     pipeline->state(ekf_slam::describeSlamConfig(config)));
+  }
   pipeline->finishLoopClosure();
+  return error;
 }
 
 // The trajectories of a run, one pose per scan with its header stamp.
@@ -518,6 +558,12 @@ void reportInput(const Arguments& a, const ekf_slam::SlamConfig& config,
              : log.laser_pose_found  ? " (log)"
                                      : " (assumed)")
          << (log.laser_inverted ? ", upside down in the log's tf: scans mirrored" : "") << "\n";
+  if (a.first_scan > 0) report << "log scans left out before scan " << a.first_scan << "\n";
+  if (!a.resume.empty()) {
+    report << "resumed from the saved state " << a.resume
+           << (a.localize_only ? " (localisation only: no landmark added)" : "") << "\n";
+  }
+  if (!a.save_state.empty()) report << "state saved to " << a.save_state << "\n";
 }
 
 void reportFrontAndBackEnd(const ekf_slam::SlamConfig& config,
@@ -655,7 +701,23 @@ int main(int argc, char** argv) {
     return 3;
   }
   ekf_slam::SlamPipeline pipeline(config.pipeline);
-  runSlam(args, log, wall_start, &pipeline);
+  if (!args.resume.empty()) {
+    ekf_slam::SlamState state;
+    std::string error = ekf_slam::readSlamState(args.resume, &state);
+    if (error.empty()) {
+      error = pipeline.resume(state);
+      if (!error.empty()) error = args.resume + ": " + error;
+    }
+    if (!error.empty()) {
+      std::cerr << "ekf_slam_offline: cannot resume: " << error << "\n";
+      return 2;
+    }
+    if (args.localize_only) pipeline.mutableFilter().setMappingEnabled(false);
+  }
+  if (const std::string error = runSlam(args, config, log, wall_start, &pipeline); !error.empty()) {
+    std::cerr << "ekf_slam_offline: " << error << "\n";
+    return 3;
+  }
   Trajectories trajectories;
   smooth(args, log, pipeline, &trajectories);
   std::string error = writeResults(args.out_dir, config, log, pipeline, trajectories);

@@ -44,6 +44,13 @@ class SlamControl {
   // pose is unusable (nothing changed).
   virtual std::string restart(const Pose2& pose, const Matrix3& covariance,
                               std::optional<LandmarkMapFile> prior, bool localize_only) = 0;
+  // ~write_state: everything a later run goes on from; none before the
+  // first scan. Waits for the loop closer to process the scans handed to it.
+  virtual std::optional<SlamState> state() const = 0;
+  // ~load_state: the map, key scans and graph of `state` replace the
+  // running ones, at once when the laser pose is known (else at the next
+  // scan). Empty when done, else why it was refused (nothing changed).
+  virtual std::string resumeFrom(SlamState state) = 0;
 };
 
 }  // namespace ekf_slam

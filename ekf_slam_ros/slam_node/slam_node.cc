@@ -157,10 +157,9 @@ void SlamNode::ensurePipeline(const PendingInput& pending, const Pose2& laser) {
   }
 }
 
-void SlamNode::createPipeline(const Pose2& laser_pose) {
-  config_.pipeline.filter.laser_pose = laser_pose;
-  laser_pose_ = laser_pose;
+PipelineOptions SlamNode::liveOptions(const Pose2& laser_pose) const {
   PipelineOptions options = config_.pipeline;
+  options.filter.laser_pose = laser_pose;
   options.back_end_thread = true;  // scan processing never waits for a loop search
   // A node runs for hours: the history ~smooth re-solves is bounded, so
   // memory follows the map, not the time (the causal poses do not depend
@@ -171,6 +170,25 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
   // grid of its own.
   options.keep_readings = keepsReadings(params_, config_);
   options.readings_grid = config_.map;
+  return options;
+}
+
+void SlamNode::createPipeline(const Pose2& laser_pose) {
+  config_.pipeline.filter.laser_pose = laser_pose;
+  laser_pose_ = laser_pose;
+  PipelineOptions options = liveOptions(laser_pose);
+  if (seed_state_) {
+    // A state loaded before the laser pose was known.
+    pipeline_ = std::make_unique<SlamPipeline>(options);
+    const std::string error = pipeline_->resume(*seed_state_);
+    seed_state_.reset();
+    if (error.empty()) {
+      pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
+      ROS_INFO("ekf_slam_node: load_state: going on from the loaded state");
+      return;
+    }
+    ROS_ERROR("ekf_slam_node: load_state: %s; a new map instead", error.c_str());
+  }
   if (start_pose_) {
     options.initial_pose = *start_pose_;
     options.initial_pose_covariance = start_covariance_;
@@ -247,6 +265,11 @@ std::optional<LandmarkMapFile> SlamNode::landmarks() const {
   if (pipeline_) {
     return toLandmarkMapFile(pipeline_->filter(), pipeline_->lineSupport(), params_.map_frame);
   }
+  if (seed_state_) {  // a loaded state waiting for the first scan
+    EkfSlam filter(config_.pipeline.filter);
+    filter.restore(seed_state_->filter);
+    return toLandmarkMapFile(filter, seed_state_->line_support, params_.map_frame);
+  }
   return seed_map_;
 }
 
@@ -265,6 +288,34 @@ std::string SlamNode::restart(const Pose2& pose, const Matrix3& covariance,
   seed_map_ = std::move(prior);
   localize_only_ = localize_only;
   if (laser_pose_) createPipeline(*laser_pose_);  // else at the next scan
+  return "";
+}
+
+std::optional<SlamState> SlamNode::state() const {
+  if (!pipeline_) return std::nullopt;
+  return pipeline_->state(describeSlamConfig(config_));
+}
+
+std::string SlamNode::resumeFrom(SlamState state) {
+  if (!laser_pose_) {
+    // Checked against the laser mount at the first scan.
+    resetState();
+    seed_map_.reset();
+    start_pose_.reset();
+    seed_state_ = std::move(state);
+    return "";
+  }
+  // Tried on a pipeline of its own: a refused state leaves the running one.
+  const Pose2 laser = *laser_pose_;
+  auto resumed = std::make_unique<SlamPipeline>(liveOptions(laser));
+  const std::string error = resumed->resume(state);
+  if (!error.empty()) return error;
+  resetState();
+  seed_map_.reset();
+  start_pose_.reset();
+  laser_pose_ = laser;
+  pipeline_ = std::move(resumed);
+  pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
   return "";
 }
 

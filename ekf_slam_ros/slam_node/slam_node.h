@@ -71,6 +71,8 @@ class SlamNode : public SlamControl {
   void clearMap() override;
   std::string restart(const Pose2& pose, const Matrix3& covariance,
                       std::optional<LandmarkMapFile> prior, bool localize_only) override;
+  std::optional<SlamState> state() const override;
+  std::string resumeFrom(SlamState state) override;
 
  private:
   // A released input (`odometry` odom → base_link, `laser` base_link → its
@@ -83,6 +85,8 @@ class SlamNode : public SlamControl {
   // or tf); later, a warning when tf's laser pose moved.
   void ensurePipeline(const PendingInput& pending, const Pose2& laser);
   void createPipeline(const Pose2& laser_pose);
+  // The options of a live pipeline with the laser at `laser_pose`.
+  PipelineOptions liveOptions(const Pose2& laser_pose) const;
   // The pose (map frame) and covariance the next pipeline starts at; empty
   // when the pose and covariance are unusable, else the problem.
   std::string setStartPose(const Pose2& pose, const Matrix3& covariance);
@@ -102,6 +106,7 @@ class SlamNode : public SlamControl {
   std::unique_ptr<SlamPipeline> pipeline_;
   std::optional<Pose2> laser_pose_;             // base_link → laser the pipeline uses
   std::optional<LandmarkMapFile> seed_map_;     // a loaded map waiting for the pipeline
+  std::optional<SlamState> seed_state_;         // a loaded state waiting for the pipeline
   std::optional<Pose2> start_pose_;             // where that pipeline starts (map frame) …
   Matrix3 start_covariance_ = Matrix3::Zero();  // … and how sure that is
   bool localize_only_ = false;

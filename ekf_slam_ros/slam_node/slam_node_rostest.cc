@@ -17,6 +17,7 @@
 #include <ekf_slam/LandmarkMap.h>
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
+#include <ekf_slam/StateFile.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/GetMap.h>
@@ -42,8 +43,10 @@
 #include <set>
 #include <thread>
 
+#include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/grid_map_file.h"
 #include "ekf_slam_core/io/landmark_map.h"
+#include "ekf_slam_core/pipeline/slam_state.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 
 namespace ekf_slam {
@@ -893,6 +896,71 @@ TEST_F(SlamNodeTest, PauseResumeSaveResetLoadAndSmooth) {
   EXPECT_EQ(observer_.diagnosticText("localize only"), "True");
 
   expectSmoothedGrid();
+}
+
+// ~write_state and ~load_state: the whole state goes to a file and comes
+// back with the map as it was; a file that is not a whole state, and a
+// save to a directory, are refused with the map kept.
+TEST_F(SlamNodeTest, WritesAndLoadsTheWholeState) {
+  ASSERT_TRUE(trigger("resume"));
+  ASSERT_TRUE(waitFor([&] { return observer_.map().landmarks.size() >= 3; }, 10.0));
+  ASSERT_TRUE(trigger("pause"));
+  ros::WallDuration(0.5).sleep();
+  const ekf_slam::LandmarkMap saved = observer_.map();
+  char folder[] = "/tmp/slam_node_state_XXXXXX";
+  ASSERT_NE(::mkdtemp(folder), nullptr);
+  const std::string path = std::string(folder) + "/office.state";
+
+  ekf_slam::StateFile write;
+  write.request.path = path;
+  ASSERT_TRUE(call("write_state", &write));
+  ASSERT_TRUE(write.response.success) << write.response.message;
+  ekf_slam::SlamState state;
+  ASSERT_EQ(ekf_slam::readSlamState(path, &state), "");
+  // Every landmark, the tentative ones too (the published map leaves them out).
+  EXPECT_GE(state.filter.landmarkCount(), static_cast<int>(saved.landmarks.size()));
+
+  ekf_slam::StateFile to_folder;
+  to_folder.request.path = folder;
+  ASSERT_TRUE(call("write_state", &to_folder));
+  EXPECT_FALSE(to_folder.response.success);
+  EXPECT_NE(to_folder.response.message.find("is a directory"), std::string::npos)
+      << to_folder.response.message;
+
+  // A truncated state is refused; the running map stays.
+  std::string bytes;
+  ASSERT_TRUE(ekf_slam::readWholeFile(path, &bytes));
+  const std::string broken = std::string(folder) + "/broken.state";
+  ASSERT_EQ(ekf_slam::writeFileAtomically(broken, bytes.substr(0, bytes.size() - 100)), "");
+  ekf_slam::StateFile load_broken;
+  load_broken.request.path = broken;
+  ASSERT_TRUE(call("load_state", &load_broken));
+  EXPECT_FALSE(load_broken.response.success);
+  EXPECT_NE(load_broken.response.message.find("truncated"), std::string::npos)
+      << load_broken.response.message;
+  EXPECT_NE(load_broken.response.message.find("current map is kept"), std::string::npos);
+  ros::WallDuration(0.3).sleep();
+  EXPECT_TRUE(sameLandmarks(observer_.map(), saved));
+
+  // After a reset, the saved state brings the map back bit for bit, and
+  // mapping goes on from it.
+  ASSERT_TRUE(trigger("reset"));
+  EXPECT_TRUE(waitFor([&] { return observer_.map().landmarks.empty(); }, 3.0));
+  ekf_slam::StateFile load;
+  load.request.path = path;
+  ASSERT_TRUE(call("load_state", &load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_TRUE(waitFor([&] { return sameLandmarks(observer_.map(), saved); }, 3.0))
+      << observer_.map().landmarks.size() << " landmarks after load_state, saved "
+      << saved.landmarks.size();
+  ASSERT_TRUE(trigger("resume"));
+  ASSERT_TRUE(freshDiagnostics());
+  const double iterations = observer_.diagnostic("iterations");
+  EXPECT_TRUE(waitFor([&] { return observer_.diagnostic("iterations") > iterations + 10; }, 5.0));
+  EXPECT_GE(observer_.map().landmarks.size(), saved.landmarks.size());
+  std::remove(path.c_str());
+  std::remove(broken.c_str());
+  ::rmdir(folder);
 }
 
 double headingOf(const geometry_msgs::Quaternion& q);

@@ -18,6 +18,7 @@
 
 #include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/map_set.h"
+#include "ekf_slam_core/pipeline/slam_state.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/slam_node/spin_thread.h"
 #include "ros_conversions/pose_conversion.h"
@@ -151,6 +152,8 @@ SlamServices::SlamServices(ros::NodeHandle node, ros::NodeHandle private_node,
   services_.push_back(slow.advertiseService("smooth", &SlamServices::onSmooth, this));
   services_.push_back(slow.advertiseService("save_map", &SlamServices::onSaveMap, this));
   services_.push_back(slow.advertiseService("load_map", &SlamServices::onLoadMap, this));
+  services_.push_back(slow.advertiseService("write_state", &SlamServices::onWriteState, this));
+  services_.push_back(slow.advertiseService("load_state", &SlamServices::onLoadState, this));
   ros::NodeHandle slow_public(node);
   slow_public.setCallbackQueue(&slow_queue_);
   services_.push_back(
@@ -360,6 +363,64 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
        << " deg)" << (localize_only ? "; localisation only" : "; mapping continues");
   response.message = text.str();
   ROS_INFO("ekf_slam_node: load_map: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamServices::onWriteState(StateFile::Request& request, StateFile::Response& response) {
+  response.success = false;
+  auto refuse = [&response](const std::string& problem) {
+    response.message = problem + " (nothing written)";
+    ROS_WARN("ekf_slam_node: write_state: %s", response.message.c_str());
+    return true;
+  };
+  if (request.path.empty()) return refuse("path is empty");
+  if (const std::string problem = writeTargetProblem(request.path); !problem.empty()) {
+    return refuse(problem);
+  }
+  // Copied on the spin thread, written here.
+  std::optional<SlamState> state;
+  if (!onSpinThread([&] { state = slam_.state(); })) return refuse(kShuttingDown);
+  if (!state) return refuse("no map yet: no scan has been processed");
+  const std::string error = writeSlamState(request.path, *state);
+  if (!error.empty()) return refuse(error);
+  const LoopCloserState& closer = state->back_end.closer;
+  long loops = 0;
+  for (const PoseGraphEdge& edge : closer.graph.edges()) loops += edge.robust && edge.active;
+  response.success = true;
+  response.message = std::to_string(state->filter.landmarkCount()) + " landmarks, " +
+                     std::to_string(closer.keys.size()) + " key scans and " +
+                     std::to_string(loops) + " loop edges written to " + request.path;
+  ROS_INFO("ekf_slam_node: write_state: %s", response.message.c_str());
+  return true;
+}
+
+bool SlamServices::onLoadState(StateFile::Request& request, StateFile::Response& response) {
+  response.success = false;
+  auto refuse = [&response](const std::string& problem) {
+    response.message = problem + " (the current map is kept)";
+    ROS_WARN("ekf_slam_node: load_state: %s", response.message.c_str());
+    return true;
+  };
+  // Read and checked here, off the spin thread.
+  SlamState state;
+  std::string error = readSlamState(request.path, &state);
+  if (!error.empty()) return refuse(error);
+  const int landmarks = state.filter.landmarkCount();
+  const size_t keys = state.back_end.closer.keys.size();
+  const bool done = onSpinThread([&] {
+    error = slam_.resumeFrom(std::move(state));
+    if (!error.empty()) return;
+    const std_msgs::Header header = mapHeader();
+    outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
+    grids_.hold(false);
+  });
+  if (!done) return refuse(kShuttingDown);
+  if (!error.empty()) return refuse(request.path + ": " + error);
+  response.success = true;
+  response.message = std::to_string(landmarks) + " landmarks and " + std::to_string(keys) +
+                     " key scans loaded from " + request.path +
+                     "; mapping goes on where the saved run stopped";
+  ROS_INFO("ekf_slam_node: load_state: %s", response.message.c_str());
   return true;
 }
 

@@ -17,6 +17,7 @@
 
 #include <ekf_slam/LoadMap.h>
 #include <ekf_slam/SaveMap.h>
+#include <ekf_slam/StateFile.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/GetMap.h>
 #include <ros/callback_queue.h>
@@ -73,6 +74,9 @@ class SlamServices {
   bool onSmooth(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
   bool onLoadMap(LoadMap::Request& request, LoadMap::Response& response);
+  // ~write_state / ~load_state: the whole SLAM state (srv/StateFile.srv).
+  bool onWriteState(StateFile::Request& request, StateFile::Response& response);
+  bool onLoadState(StateFile::Request& request, StateFile::Response& response);
   // dynamic_map (nav_msgs/GetMap, as gmapping and slam_toolbox offer it):
   // the grid last published on `map`; fails while there is none.
   bool onDynamicMap(nav_msgs::GetMap::Request&, nav_msgs::GetMap::Response& response);
@@ -89,7 +93,7 @@ class SlamServices {
   SlamControl& slam_;
   ScanOutputs& outputs_;
   GridOutput& grids_;
-  ros::CallbackQueue slow_queue_;  // ~smooth, ~save_map, ~load_map
+  ros::CallbackQueue slow_queue_;  // ~smooth, the saves and loads
   std::atomic<bool> closing_{false};
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<ros::AsyncSpinner> slow_thread_;

@@ -1,0 +1,206 @@
+#include "ekf_slam_core/pipeline/slam_state.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "ekf_slam_core/io/test_folder.h"
+#include "ekf_slam_core/pipeline/slam_pipeline.h"
+#include "ekf_slam_core/sim/drive.h"
+#include "ekf_slam_core/sim/polygon_world.h"
+#include "ekf_slam_core/testing/carton_room.h"
+
+namespace ekf_slam {
+namespace {
+
+using testing::cartonRoom;
+
+const Pose2 kLaser(0.1, 0.0, 0.0);
+
+PipelineOptions islandOptions() {
+  PipelineOptions options;
+  options.filter.laser_pose = kLaser;
+  options.landmarks = LandmarkSet::kPointsAndLines;
+  options.loop_closure.min_loop_travel = 6.0;
+  options.loop_closure.correction_delay = 0;
+  return options;
+}
+
+// One and a half laps around the island with odometry that drifts in
+// heading: the scans and the odometry at each.
+struct Drive {
+  std::vector<Scan> scans;
+  std::vector<Pose2> odometry;
+  std::vector<Pose2> truth;
+};
+
+Drive islandDrive() {
+  const sim::PolygonWorld world = cartonRoom();
+  std::mt19937 rng(5);
+  sim::SweepGeometry sweep;
+  sweep.max_range = 8.0;
+  const double radius = 2.3, step = 0.08;
+  const int scans = static_cast<int>(1.5 * 2.0 * kPi * radius / step);
+  Drive drive;
+  Pose2 odometry, previous;
+  for (int i = 0; i <= scans; ++i) {
+    const double a = step * i / radius;
+    const Pose2 truth(3.0 + radius * std::sin(a), 1.5 - radius * std::cos(a), a);
+    if (i > 0) odometry = compose(odometry, compose(between(previous, truth), Pose2(0, 0, 0.002)));
+    previous = truth;
+    Scan scan = sim::simulateScan(world, compose(truth, kLaser), sweep, 0.01, &rng, 0.05);
+    scan.stamp = 0.1 * i;
+    drive.scans.push_back(scan);
+    drive.odometry.push_back(odometry);
+    drive.truth.push_back(truth);
+  }
+  return drive;
+}
+
+// The first half of the drive, before any loop closes.
+SlamPipeline firstHalf(const Drive& drive, const PipelineOptions& options = islandOptions()) {
+  SlamPipeline pipeline(options);
+  for (size_t i = 0; i < drive.scans.size() / 2; ++i) {
+    pipeline.processScan(drive.scans[i], drive.odometry[i]);
+  }
+  return pipeline;
+}
+
+class SlamStateFile : public TestFolder {};
+
+// The bytes of a state read back give the same bytes, and the filter, the
+// key scans and the graph exactly as saved.
+TEST_F(SlamStateFile, RoundTripsBitForBit) {
+  const Drive drive = islandDrive();
+  // As the live node runs it: the back end on its own thread, a bounded
+  // history.
+  PipelineOptions live = islandOptions();
+  live.back_end_thread = true;
+  live.history_scans = 20;
+  const SlamState from_live = firstHalf(drive, live).state();
+  EXPECT_EQ(from_live.back_end.key_filtered.size(), from_live.back_end.closer.keys.size());
+  const SlamPipeline pipeline = firstHalf(drive);
+  const SlamState state = pipeline.state("made by a test\n");
+  ASSERT_GT(state.back_end.closer.keys.size(), 5u);
+  ASSERT_GT(state.filter.landmarkCount(), 5);
+  const std::string path = dir_ + "/office.state";
+  ASSERT_EQ(writeSlamState(path, state), "");
+  SlamState read;
+  ASSERT_EQ(readSlamState(path, &read), "");
+  EXPECT_EQ(encodeSlamState(read), encodeSlamState(state));
+  EXPECT_EQ(read.configuration, "made by a test\n");
+  EXPECT_EQ(read.filter.x.head(read.filter.dim), state.filter.x.head(state.filter.dim));
+  EXPECT_EQ(read.filter.covariance(), state.filter.covariance());
+  EXPECT_EQ(read.filter.slot_of_id, state.filter.slot_of_id);
+  ASSERT_EQ(read.back_end.closer.keys.size(), state.back_end.closer.keys.size());
+  EXPECT_EQ(read.back_end.closer.keys[3].points, state.back_end.closer.keys[3].points);
+  EXPECT_EQ(read.back_end.closer.graph.poses().size(), state.back_end.closer.graph.poses().size());
+  EXPECT_EQ(read.line_support.size(), state.line_support.size());
+  EXPECT_EQ(read.scans, static_cast<long>(drive.scans.size() / 2));
+}
+
+// Continue mapping: a run resumed from the state of the first half closes
+// its loops with the first half's key scans and is as close to the truth
+// as one uninterrupted run. Two ways to go on: the same log's next scan,
+// its odometry continuing (the motion since the save is taken); and
+// another day, the robot where it stopped and its odometry starting
+// anywhere.
+TEST_F(SlamStateFile, AResumedRunClosesLoopsWithTheSavedKeyScans) {
+  const Drive drive = islandDrive();
+  const size_t half = drive.scans.size() / 2;
+  const std::string path = dir_ + "/first_half.state";
+  {
+    const SlamPipeline first = firstHalf(drive);
+    ASSERT_EQ(first.backEndCounters().accepted, 0) << "the loops close in the second half";
+    ASSERT_EQ(writeSlamState(path, first.state()), "");
+  }
+  SlamPipeline whole(islandOptions());
+  for (size_t i = 0; i < drive.scans.size(); ++i) {
+    whole.processScan(drive.scans[i], drive.odometry[i]);
+  }
+  const std::vector<StampedPose> whole_causal = whole.causalScanPoses();
+  for (const bool another_day : {false, true}) {
+    SlamState state;
+    ASSERT_EQ(readSlamState(path, &state), "");
+    SlamPipeline resumed(islandOptions());
+    ASSERT_EQ(resumed.resume(state), "");
+    EXPECT_EQ(resumed.filter().state(), state.filter.x.head(state.filter.dim));
+    // Another day: from the scan where the first half stopped, with
+    // odometry from another origin.
+    const size_t from = another_day ? half - 1 : half;
+    const Pose2 origin(5.0, -3.0, 1.0);
+    for (size_t i = from; i < drive.scans.size(); ++i) {
+      Scan scan = drive.scans[i];
+      if (another_day) scan.stamp += 86400.0;
+      resumed.processScan(
+          scan, another_day ? compose(origin, between(drive.odometry[from], drive.odometry[i]))
+                            : drive.odometry[i]);
+    }
+    EXPECT_GT(resumed.backEndCounters().accepted, 0) << "no loop with the saved key scans";
+    EXPECT_GT(resumed.backEndCounters().key_scans, state.back_end.closer.counters.key_scans);
+    // The resumed run's poses are in the saved map (the first scan's pose
+    // is its origin) and as close to the truth as one run's.
+    const std::vector<StampedPose> resumed_causal = resumed.causalScanPoses();
+    ASSERT_EQ(resumed_causal.size(), drive.scans.size() - from);
+    double resumed_sum = 0.0, whole_sum = 0.0, resumed_worst = 0.0;
+    for (size_t k = 0; k < resumed_causal.size(); ++k) {
+      const Pose2 truth = between(drive.truth[0], drive.truth[from + k]);
+      const Pose2& a = resumed_causal[k].pose;
+      const Pose2& b = whole_causal[from + k].pose;
+      const double resumed_error = std::hypot(a.x - truth.x, a.y - truth.y);
+      resumed_sum += resumed_error;
+      resumed_worst = std::max(resumed_worst, resumed_error);
+      whole_sum += std::hypot(b.x - truth.x, b.y - truth.y);
+    }
+    const double resumed_mean = resumed_sum / resumed_causal.size();
+    const double whole_mean = whole_sum / resumed_causal.size();
+    std::cout << (another_day ? "another day" : "the log's next scan")
+              << ": loops after the resume " << resumed.backEndCounters().accepted
+              << "; second half's causal error against the truth: resumed " << resumed_mean
+              << " m mean (largest " << resumed_worst << " m), one run " << whole_mean << " m\n";
+    EXPECT_LT(resumed_mean, whole_mean + 0.01) << (another_day ? "another day" : "next scan");
+    EXPECT_LT(resumed_worst, 0.05);
+  }
+}
+
+TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
+  const Drive drive = islandDrive();
+  const SlamState state = firstHalf(drive).state();
+  const std::string bytes = encodeSlamState(state);
+  SlamState read;
+  const auto refused = [&](const std::string& data) {
+    read.scans = -7;
+    const std::string error = decodeSlamState(data, &read);
+    EXPECT_EQ(read.scans, -7) << "a refused state changed the output";
+    return error;
+  };
+  EXPECT_NE(refused(bytes.substr(0, bytes.size() / 2)).find("truncated"), std::string::npos);
+  EXPECT_NE(refused(bytes.substr(0, 20)).find("header"), std::string::npos);
+  std::string corrupt = bytes;
+  corrupt[bytes.size() / 2] ^= 0x40;
+  EXPECT_NE(refused(corrupt).find("checksum"), std::string::npos);
+  std::string other_version = bytes;
+  other_version[15] = 2;  // the version's low byte, after the magic line
+  EXPECT_NE(refused(other_version).find("version 2"), std::string::npos) << refused(other_version);
+  EXPECT_NE(refused("P5\n640 480\n").find("not a SLAM state"), std::string::npos);
+  EXPECT_EQ(decodeSlamState(bytes, &read), "");
+
+  EXPECT_NE(readSlamState(dir_ + "/missing.state", &read).find("missing.state"), std::string::npos);
+
+  // Another laser mount: refused, and the pipeline goes on with its own map.
+  PipelineOptions moved = islandOptions();
+  moved.filter.laser_pose = Pose2(0.3, 0.0, 0.0);
+  SlamPipeline other(moved);
+  const std::string error = other.resume(state);
+  EXPECT_NE(error.find("laser"), std::string::npos) << error;
+  EXPECT_EQ(other.filter().landmarkCount(), 0);
+  EXPECT_EQ(other.backEndCounters().key_scans, 0);
+  // Only before the first scan.
+  SlamPipeline started(islandOptions());
+  started.processScan(drive.scans[0], drive.odometry[0]);
+  EXPECT_NE(started.resume(state).find("before the first scan"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ekf_slam

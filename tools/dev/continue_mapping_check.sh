@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Continue mapping on the shared logs: each log is mapped in one run, and
+# again in two halves, the second resumed from the state the first saved
+# (ekf_slam_offline --save-state / --resume). The halves' trajectories put
+# end to end are scored like the one run's (causal: what the live node
+# publishes; final: the full smoother), against the log's ground-truth
+# relations. The second half is also localised in the first half's state
+# with mapping off (--localize-only; the robot starts where the first half
+# stopped, its true start pose): its causal error against the same half of
+# the one run.
+#   tools/dev/continue_mapping_check.sh DEVEL_DIR [OUT_DIR]
+# DATASETS="intel aces" by default; results in OUT_DIR (default
+# output/continue_mapping/): continue_mapping.md, and per log the runs'
+# folders. Exit code 1 when a half-and-half error exceeds the one run's by
+# more than 5 %.
+set -euo pipefail
+devel=${1:?usage: continue_mapping_check.sh DEVEL_DIR [OUT_DIR]}
+root=$(cd "$(dirname "$0")/../.." && pwd)
+out=${2:-$root/output/continue_mapping}
+data=${DATA_DIR:-$root/../shared/datasets}
+bin=$devel/lib/ekf_slam
+if [ ! -d "$data" ]; then
+  echo "continue_mapping_check: $data not found (the datasets live beside the repository)" >&2
+  exit 0
+fi
+mkdir -p "$out"
+table=$out/continue_mapping.md
+{
+  echo "| log | scans (first half) | causal: one run [m] | causal: two halves [m] | final: one run [m] | final: two halves [m] | loops: first half, at the end | second half causal: one run / localised [m] |"
+  echo "|---|---|---|---|---|---|---|---|"
+} > "$table"
+
+mean() {  # relations trajectory -> mean translation error (m) over the relations it holds
+  { "$bin/evaluate_relations" --relations "$1" --trajectory "$2" 2>/dev/null || true; } |
+    sed -n 's/.*translation: \([0-9.]*\) +- .*/\1/p'
+}
+
+failed=0
+for name in ${DATASETS:-intel aces}; do
+  bag=$data/$name.orig.bag
+  relations=$data/$name.relations
+  [ -f "$bag" ] || { echo "continue_mapping_check: $bag missing, skipped" >&2; continue; }
+  dir=$out/$name
+  mkdir -p "$dir"
+  echo "== $name: one run"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/whole" --no-maps > "$dir/whole.log" 2>&1
+  scans=$(sed -n 's/^scans: \([0-9]*\) .*/\1/p' "$dir/whole/report.txt")
+  half=$((scans / 2))
+  echo "== $name: the first $half scans, state saved"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/first" --no-maps --max-scans "$half" \
+    --save-state "$dir/first.state" > "$dir/first.log" 2>&1
+  echo "== $name: the rest, resumed"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/second" --no-maps --first-scan "$half" \
+    --resume "$dir/first.state" > "$dir/second.log" 2>&1
+  echo "== $name: the rest, localised in the first half's state"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/localised" --no-maps --first-scan "$half" \
+    --resume "$dir/first.state" --localize-only > "$dir/localised.log" 2>&1
+  loops_first=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/first/report.txt" | head -n 1)
+  loops_second=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/second/report.txt" | head -n 1)
+  row="| $name | $half |"
+  for kind in live smoothed; do
+    cat "$dir/first/trajectory_$kind.txt" "$dir/second/trajectory_$kind.txt" > "$dir/halves_$kind.txt"
+    one=$(mean "$relations" "$dir/whole/trajectory_$kind.txt")
+    two=$(mean "$relations" "$dir/halves_$kind.txt")
+    row="$row $one | $two |"
+    if ! /usr/bin/python3 -c "import sys; sys.exit(0 if $two <= 1.05 * $one else 1)"; then
+      echo "continue_mapping_check: $name $kind: two halves $two m against one run $one m (over 5 %)" >&2
+      failed=1
+    fi
+  done
+  # The one run's second half: its scans from the localised run's first stamp on.
+  start=$(awk '!/^#/ {print $1; exit}' "$dir/localised/trajectory_live.txt")
+  awk -v t="$start" '/^#/ || $1 >= t' "$dir/whole/trajectory_live.txt" > "$dir/whole_second_half_live.txt"
+  one_half=$(mean "$relations" "$dir/whole_second_half_live.txt")
+  localised=$(mean "$relations" "$dir/localised/trajectory_live.txt")
+  echo "$row ${loops_first:-?}, ${loops_second:-?} | $one_half / $localised |" >> "$table"
+done
+echo
+cat "$table"
+exit $failed
