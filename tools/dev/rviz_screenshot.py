@@ -5,6 +5,12 @@ printed. Used by the rviz smoke rostest (test/rviz_smoke.test) and to make
 the README's screenshot:
 
   rviz_screenshot.py --config config/rviz/sim.rviz --out shot.png [--wait 20]
+                     [--at-clock T [--pause-service /bag_player/pause_playback]]
+
+--at-clock T keeps rviz running until /clock reaches T (a replay's log
+time, s), pauses the bag player through --pause-service if given, renders
+--wait s more, takes the shot and resumes the player: a view of a replay at
+a chosen moment (tools/dev/replay_screenshots.sh).
 
 Needs a ROS master (rviz is a ROS node), Xvfb, xwd, rviz. Exit status 0 when
 rviz ran for the whole wait, the screenshot was written and rviz printed no
@@ -71,12 +77,41 @@ ERROR_PATTERN = re.compile(r"\[ERROR\]|failed to load|PluginlibFactory|Segmentat
                            r"Could not load|error while loading", re.IGNORECASE)
 
 
+def pause_player(service, pause):
+    import rospy
+    from std_srvs.srv import SetBool
+    rospy.wait_for_service(service, 10.0)
+    rospy.ServiceProxy(service, SetBool)(pause)
+
+
+def wait_for_clock(at, pause_service, rviz):
+    """Blocks until /clock reaches `at` (or rviz exits); then pauses the
+    player when a service is named. True when it paused it."""
+    import rospy
+    from rosgraph_msgs.msg import Clock
+    rospy.init_node("rviz_screenshot_clock", anonymous=True, disable_signals=True)
+    reached = []
+    sub = rospy.Subscriber("/clock", Clock, lambda m: reached.append(True)
+                           if m.clock.to_sec() >= at and not reached else None)
+    while not reached and rviz.poll() is None:
+        time.sleep(0.05)
+    sub.unregister()
+    if not reached or not pause_service:
+        return False
+    pause_player(pause_service, True)
+    return True
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--config", required=True)
     parser.add_argument("--out", required=True)
     parser.add_argument("--wait", type=float, default=20.0, help="s of rendering before the shot")
     parser.add_argument("--size", default="1400x900")
+    parser.add_argument("--at-clock", type=float, default=None,
+                        help="log time (s on /clock) to wait for before the --wait")
+    parser.add_argument("--pause-service", default="",
+                        help="std_srvs/SetBool pausing the bag player while the shot is taken")
     args, _ = parser.parse_known_args([a for a in sys.argv[1:] if not a.startswith("__")])
 
     for tool in ("Xvfb", "xwd", "rviz"):
@@ -96,6 +131,9 @@ def main():
         env = dict(os.environ, DISPLAY=":%d" % display, LIBGL_ALWAYS_SOFTWARE="1")
         rviz = subprocess.Popen(["rviz", "-d", args.config, "__name:=rviz_smoke"], env=env,
                                 stdout=log, stderr=subprocess.STDOUT)
+        paused = False
+        if args.at_clock is not None:
+            paused = wait_for_clock(args.at_clock, args.pause_service, rviz)
         deadline = time.time() + args.wait
         while time.time() < deadline:
             if rviz.poll() is not None:
@@ -113,6 +151,8 @@ def main():
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
         matplotlib.image.imsave(args.out, image)
     finally:
+        if args.at_clock is not None and paused:
+            pause_player(args.pause_service, False)
         if rviz is not None and rviz.poll() is None:
             rviz.send_signal(signal.SIGINT)
             try:
