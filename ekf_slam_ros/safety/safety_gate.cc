@@ -20,6 +20,14 @@ Pose2 arcPose(double length, double turn) {
   return Pose2(radius * std::sin(turn), radius * (1.0 - std::cos(turn)), turn);
 }
 
+// The speed a stopping path runs at: the commanded one, or the robot's own
+// when that is faster the same way (or the command is zero): the brakes,
+// not the command, decide how soon the robot stops.
+double pathSpeed(double commanded, double measured) {
+  if (commanded * measured < 0.0) return commanded;
+  return std::abs(measured) > std::abs(commanded) ? measured : commanded;
+}
+
 }  // namespace
 
 const char* toString(StopReason reason) {
@@ -73,8 +81,15 @@ void SafetyGate::setStall(bool stalled, double now) {
 }
 
 double SafetyGate::stoppingClearance(const Command& command) const {
+  return clearanceAlong(command, Pose2(), Command{});
+}
+
+double SafetyGate::clearanceAlong(const Command& requested, const Pose2& start,
+                                  const Command& motion) const {
   if (points_.empty()) return kInfinity;
   const SafetyOptions& o = options_;
+  const Command command{pathSpeed(requested.linear, motion.linear),
+                        pathSpeed(requested.angular, motion.angular)};
   // Length and turn of the stopping path: the command for reaction_time,
   // then braking to rest along the same arc (both speeds fall together,
   // limited by the slower of the two decelerations).
@@ -91,7 +106,7 @@ double SafetyGate::stoppingClearance(const Command& command) const {
   double closest = kInfinity;
   for (int i = 0; i <= steps; ++i) {
     const double f = static_cast<double>(i) / steps;
-    const Pose2 pose = arcPose(length * f, turn * f);
+    const Pose2 pose = compose(start, arcPose(length * f, turn * f));
     for (const Vector2& p : points_) {
       const double d = distanceToFootprint(transformTo(pose, p), o.footprint_front,
                                            o.footprint_rear, o.footprint_half_width);
@@ -101,8 +116,8 @@ double SafetyGate::stoppingClearance(const Command& command) const {
   return closest;
 }
 
-bool SafetyGate::safe(const Command& command, double now_clearance) const {
-  const double along = stoppingClearance(command);
+bool SafetyGate::safe(const Command& command, const Pose2& start, double now_clearance) const {
+  const double along = clearanceAlong(command, start, motion_);
   // Clear of the margin, or no nearer than now to what is already inside it.
   return along >= options_.clearance || along >= now_clearance - 1e-6;
 }
@@ -140,21 +155,31 @@ GateDecision SafetyGate::filter(const Command& requested, double now) const {
     out.closest = kInfinity;
     return out;
   }
-  const double now_clearance = stoppingClearance(Command{});
-  if (safe(out.command, now_clearance)) {
-    out.closest = stoppingClearance(out.command);
+  // Where the robot is now: the scan's pose moved on at the measured
+  // velocity for the scan's age. The clearance of that pose alone is what
+  // "no nearer than now" compares with.
+  const double age = std::clamp(now - scan_stamp_, 0.0, options_.scan_timeout);
+  const Pose2 start = arcPose(motion_.linear * age, motion_.angular * age);
+  double now_clearance = kInfinity;
+  for (const Vector2& p : points_) {
+    now_clearance = std::min(
+        now_clearance, distanceToFootprint(transformTo(start, p), options_.footprint_front,
+                                           options_.footprint_rear, options_.footprint_half_width));
+  }
+  if (safe(out.command, start, now_clearance)) {
+    out.closest = clearanceAlong(out.command, start, motion_);
     return out;
   }
   // Slower, on the same turn rate; then a turn on the spot; then nothing.
   Command candidate = out.command;
   for (int tenth = 9; tenth >= 0; --tenth) {
     candidate.linear = out.command.linear * tenth / 10.0;
-    if (safe(candidate, now_clearance)) break;
+    if (safe(candidate, start, now_clearance)) break;
     if (tenth == 0) candidate = Command{};
   }
   out.command = candidate;
   out.reason = StopReason::kObstacle;
-  out.closest = stoppingClearance(out.command);
+  out.closest = clearanceAlong(out.command, start, motion_);
   return out;
 }
 

@@ -8,6 +8,11 @@
 // footprint (a rectangle around base_link, inflated by `clearance`) clear
 // of every laser point, or at least does not come nearer to one that is
 // already inside that margin (so the robot can always back or turn away).
+// The readings are as old as the scan: the path starts where the robot is
+// now, after driving at its measured velocity since the scan was measured,
+// and runs at least as fast as the robot already moves (it cannot stop
+// sooner than its brakes allow, whatever the command says). A late scan
+// (a loaded computer, a slow serial line) thus counts for what it is.
 // Otherwise the linear speed is scaled down in steps of a tenth until the
 // stopping path is clear; a turn on the spot is the last resort before a
 // full stop.
@@ -38,9 +43,9 @@ struct SafetyOptions {
   double clearance = 0.10;               // m kept between the footprint and a reading
   double deceleration = 0.3;             // m/s², the driver's linear_deceleration
   double angular_deceleration = 1.7453;  // rad/s², the driver's angular_acceleration
-  double reaction_time = 0.3;            // s: scan age, command latency, SIP period
+  double reaction_time = 0.3;            // s: command latency and the SIP period
   double min_range = 0.05;               // m: nearer readings are the scanner's own housing
-  double scan_timeout = 0.5;             // s without laser data: no forward motion
+  double scan_timeout = 0.5;             // s: a scan measured longer ago is no laser data
   double stall_hold = 1.0;               // s the robot stays stopped after a stall clears
   bool use_laser = true;                 // false: bumpers and stall only
 };
@@ -72,8 +77,11 @@ class SafetyGate {
  public:
   explicit SafetyGate(SafetyOptions options = {});
 
-  // Valid readings of a scan in base_link (m), taken at time `stamp` (s).
+  // Valid readings of a scan in base_link (m), measured at time `stamp`
+  // (s, the scan's own stamp, on the clock filter() is given).
   void setObstacles(std::vector<Vector2> points, double stamp);
+  // The robot's velocity as its odometry measures it (zero until given).
+  void setMotion(const Command& measured) { motion_ = measured; }
   // Bumper segments pressed (bit masks as the P2OS SIP gives them).
   void setBumpers(unsigned front, unsigned rear);
   void setStall(bool stalled, double now);
@@ -82,17 +90,22 @@ class SafetyGate {
   GateDecision filter(const Command& requested, double now) const;
 
   // The smallest distance (m) between the footprint and the readings over
-  // the stopping path of `command`; +inf without readings.
+  // the stopping path of `command` from where the scan was measured, the
+  // robot at rest; +inf without readings.
   double stoppingClearance(const Command& command) const;
 
   const SafetyOptions& options() const { return options_; }
 
  private:
-  bool safe(const Command& command, double now_clearance) const;
+  // Along the stopping path of `command` from `start` (base_link at the
+  // scan → now), at least as fast as `motion`, the robot's velocity.
+  double clearanceAlong(const Command& command, const Pose2& start, const Command& motion) const;
+  bool safe(const Command& command, const Pose2& start, double now_clearance) const;
 
   SafetyOptions options_;
   std::vector<Vector2> points_;
   double scan_stamp_ = -1.0;
+  Command motion_;
   unsigned front_bumpers_ = 0, rear_bumpers_ = 0;
   bool stalled_ = false;
   double stall_until_ = -1.0;

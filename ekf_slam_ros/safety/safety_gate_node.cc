@@ -4,9 +4,11 @@
 // wheel stall, and reports every stop on /diagnostics and in the log.
 //
 // Topics: cmd_vel_in (geometry_msgs/Twist, from teleop, step mode or the
-// waypoint driver), scan (sensor_msgs/LaserScan), bumpers (std_msgs/UInt16,
-// the SIP's stall/bump word as p3dx_driver publishes it), stall
-// (std_msgs/Bool) in; cmd_vel (geometry_msgs/Twist) out.
+// waypoint driver), scan (sensor_msgs/LaserScan, its stamp on this
+// computer's clock), odom (nav_msgs/Odometry: the robot's velocity),
+// bumpers (std_msgs/UInt16, the SIP's stall/bump word as p3dx_driver
+// publishes it), stall (std_msgs/Bool) in; cmd_vel (geometry_msgs/Twist)
+// out.
 //
 // The last command is re-checked and re-sent at `rate` while it is fresher
 // than input_timeout, so an obstacle that appears stops a robot that keeps
@@ -15,6 +17,7 @@
 // Parameters: docs/bringup.md, "Safety".
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/Bool.h>
@@ -79,6 +82,7 @@ class SafetyGateNode {
     cmd_publisher_ = node.advertise<geometry_msgs::Twist>("cmd_vel", 1);
     cmd_subscriber_ = node.subscribe("cmd_vel_in", 1, &SafetyGateNode::onCommand, this);
     scan_subscriber_ = node.subscribe("scan", 1, &SafetyGateNode::onScan, this);
+    odom_subscriber_ = node.subscribe("odom", 5, &SafetyGateNode::onOdometry, this);
     bumper_subscriber_ = node.subscribe("bumpers", 5, &SafetyGateNode::onBumpers, this);
     stall_subscriber_ = node.subscribe("stall", 5, &SafetyGateNode::onStall, this);
     timer_ = node.createTimer(ros::Duration(1.0 / params.rate), &SafetyGateNode::onTimer, this);
@@ -127,8 +131,25 @@ class SafetyGateNode {
       points.push_back(
           ekf_slam::transformFrom(mount, Vector2(r * std::cos(bearing), r * std::sin(bearing))));
     }
-    gate_.setObstacles(std::move(points), ros::Time::now().toSec());
+    // Judged by when the scan was measured, not when it arrived: a scan
+    // held up on a loaded computer shows the obstacles as they were.
+    const double age = (ros::Time::now() - scan.header.stamp).toSec();
+    if (age > params_.gate.scan_timeout) {
+      ROS_WARN_THROTTLE(5.0,
+                        "safety_gate: a scan measured %.2f s ago arrived (scan_timeout %.2f s): "
+                        "forward motion refused until a fresh one; a loaded computer, or the "
+                        "laser's clock apart from this one's",
+                        age, params_.gate.scan_timeout);
+    }
+    gate_.setObstacles(std::move(points), scan.header.stamp.toSec());
     if (live()) sendDecision();
+  }
+
+  void onOdometry(const nav_msgs::Odometry& message) {
+    const geometry_msgs::Twist& t = message.twist.twist;
+    if (std::isfinite(t.linear.x) && std::isfinite(t.angular.z)) {
+      gate_.setMotion({t.linear.x, t.angular.z});
+    }
   }
 
   void onBumpers(const std_msgs::UInt16& message) {
@@ -198,7 +219,8 @@ class SafetyGateNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   ros::Publisher cmd_publisher_;
-  ros::Subscriber cmd_subscriber_, scan_subscriber_, bumper_subscriber_, stall_subscriber_;
+  ros::Subscriber cmd_subscriber_, scan_subscriber_, odom_subscriber_, bumper_subscriber_,
+      stall_subscriber_;
   ros::Timer timer_;
   diagnostic_updater::Updater diagnostics_;
   safety::Command request_;

@@ -133,6 +133,37 @@ TEST(SafetyGate, NoLaserDataNoForwardMotion) {
   EXPECT_EQ(gate.filter({-0.3, 0.0}, 10.6).reason, StopReason::kNone);
 }
 
+// The readings are as old as the scan: a robot driving at 0.4 m/s is
+// 0.18 m nearer the wall 0.45 s after the scan than the scan shows. The
+// same wall that leaves 0.4 m/s alone at once slows it then.
+TEST(SafetyGate, ALateScanCountsForTheDistanceDrivenSinceIt) {
+  SafetyGate gate;
+  gate.setMotion({0.4, 0.0});
+  gate.setObstacles(wallAhead(0.85), 10.0);
+  EXPECT_EQ(gate.filter({0.4, 0.0}, 10.0).reason, StopReason::kNone);
+  const GateDecision late = gate.filter({0.4, 0.0}, 10.45);
+  EXPECT_EQ(late.reason, StopReason::kObstacle);
+  EXPECT_LT(late.command.linear, 0.4);
+  // At rest, the age changes nothing.
+  gate.setMotion({0.0, 0.0});
+  EXPECT_EQ(gate.filter({0.4, 0.0}, 10.45).reason, StopReason::kNone);
+}
+
+// A robot already at 0.4 m/s cannot stop sooner than its brakes allow: a
+// slow command does not shorten the stopping path, and the gate stops it
+// where a robot at rest could still creep forward.
+TEST(SafetyGate, TheRobotsOwnSpeedBoundsTheStoppingPath) {
+  SafetyGate gate;
+  gate.setObstacles(wallAhead(0.6), 10.0);
+  EXPECT_EQ(gate.filter({0.1, 0.0}, 10.0).reason, StopReason::kNone);
+  gate.setMotion({0.4, 0.0});
+  const GateDecision moving = gate.filter({0.1, 0.0}, 10.0);
+  EXPECT_EQ(moving.reason, StopReason::kObstacle);
+  EXPECT_EQ(moving.command.linear, 0.0);
+  // Backing away is a command against the motion: allowed.
+  EXPECT_EQ(gate.filter({-0.2, 0.0}, 10.0).reason, StopReason::kNone);
+}
+
 TEST(SafetyGate, HousingAndNonFiniteReadingsAreIgnored) {
   SafetyGate gate;
   const double nan = std::numeric_limits<double>::quiet_NaN();
