@@ -23,7 +23,7 @@ BackEndLink::BackEndLink(const PipelineOptions& options)
 
 BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pose2& new_odometry,
                                        bool usable, const Pose2& filtered, long record,
-                                       const std::vector<int>& new_landmarks) {
+                                       const std::vector<int>& observed) {
   if (resume_at_) {
     front_end_offset_ = compose(*resume_at_, inverse(new_odometry));
     resume_at_.reset();
@@ -34,7 +34,7 @@ BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pos
   const int loop_scan = first_loop_scan_ + static_cast<int>(record_of_loop_scan_.size());
   record_of_loop_scan_.push_back(record);
   pending_filtered_.push_back(filtered);
-  for (int id : new_landmarks) landmark_scan_[id] = loop_scan;
+  for (int id : observed) landmark_scan_[id] = loop_scan;
   view_ = back_end_->addScan(stamp, scan, laser_pose_, odometry, usable);
   const Pose2 graph_pose = view_->poseOf(odometry);
   if (!map_from_graph_) map_from_graph_ = compose(filtered, inverse(graph_pose));
@@ -49,7 +49,7 @@ BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pos
 // The filter's pose at each key scan the back end reports (its pose when
 // that scan was processed, before any re-anchoring at it), so that a loop
 // closure can move each landmark with the key scan it hangs off (the newest
-// key scan at or before the scan that created it). The back end may report
+// key scan at or before the scan that last observed it). The back end may report
 // a key scan scans after it was taken: the poses wait in pending_filtered_.
 void BackEndLink::trackKeyScans() {
   const BackEndView& view = *view_;

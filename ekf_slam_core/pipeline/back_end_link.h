@@ -2,8 +2,8 @@
 // scans, inline or on its own thread: loop_closure/back_end.h). It hands
 // every scan to the back end, turns the view the scan is given into the
 // causal estimate in the map frame, and remembers what a correction needs:
-// the filter's pose at each key scan and the loop scan that created each
-// landmark, so that after an optimisation the filter can take the
+// the filter's pose at each key scan and the loop scan that last observed
+// each landmark, so that after an optimisation the filter can take the
 // loop-closed geometry (re-anchoring). After the run it turns the graph's
 // loops into constraints between the filter's iterations, and its
 // optimised trajectory into starting poses, for the full smoother.
@@ -37,14 +37,15 @@ class BackEndLink {
   };
   // Every scan with a usable odometry, in order: `odometry` is the control
   // source's pose, `filtered` the pose the filter gave the scan, `record`
-  // the scan's number in the history, `new_landmarks` the ids of the
-  // landmarks the scan created.
+  // the scan's number in the history, `observed` the ids of the landmarks
+  // the scan matched or created.
   Step addScan(double stamp, const Scan& scan, const Pose2& odometry, bool usable,
-               const Pose2& filtered, long record, const std::vector<int>& new_landmarks);
+               const Pose2& filtered, long record, const std::vector<int>& observed);
 
-  // After new loops: per landmark of `filter` created at a known key scan,
-  // the transform that takes that key scan from where the filter had it to
-  // where the graph has it now. The key scans are taken as re-anchored.
+  // After new loops: per landmark of `filter` last observed at a known
+  // loop scan, the transform that takes the key scan at or before it
+  // from where the filter had it to where the graph has it now. The key
+  // scans are taken as re-anchored.
   std::vector<std::pair<int, Pose2>> reanchorCorrections(const EkfSlam& filter);
   // The same transforms, the key scans left as they are: where re-anchoring
   // would move each landmark now (for drawing the map in the graph's frame).
@@ -127,7 +128,7 @@ class BackEndLink {
   std::vector<Pose2> key_filtered_;     // the filter's pose at each key scan (map frame)
   std::deque<Pose2> pending_filtered_;  // the filter's pose at loop scans pending_base_ …
   long pending_base_ = 0;               // … on, whose key scans the back end may still report
-  std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan that created it
+  std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan last observing it
   std::optional<Pose2> map_from_graph_;         // the graph's frame in the map frame (first scan)
   Pose2 last_front_end_;                        // the back end's front-end pose at the last scan
   // After a resume: where the saved run stopped (until the first scan) and

@@ -4,6 +4,19 @@
 #include <sstream>
 
 namespace ekf_slam {
+namespace {
+
+// The landmarks a scan matched or created, points and lines: each then
+// hangs off this scan's key scan when a loop closure moves the map.
+std::vector<int> observedIds(const ScanResult& result) {
+  std::vector<int> ids = result.iteration.new_landmark_ids;
+  ids.insert(ids.end(), result.lines.new_landmark_ids.begin(), result.lines.new_landmark_ids.end());
+  for (const PointMatch& m : result.iteration.matches) ids.push_back(m.landmark_id);
+  for (const LineMatch& m : result.lines.matches) ids.push_back(m.landmark_id);
+  return ids;
+}
+
+}  // namespace
 
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
     : options_(options),
@@ -271,11 +284,8 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
                           ScanResult* out) {
   Pose2 causal = out->pose;
   if (back_end_.active() && scan != nullptr) {
-    std::vector<int> created = out->iteration.new_landmark_ids;
-    created.insert(created.end(), out->lines.new_landmark_ids.begin(),
-                   out->lines.new_landmark_ids.end());
     const BackEndLink::Step step = back_end_.addScan(stamp, *scan, odometry, usable, out->pose,
-                                                     history_.recordedScans(), created);
+                                                     history_.recordedScans(), observedIds(*out));
     causal = step.causal;
     if (step.new_loops && options_.loop_closure.reanchor_filter) {
       // The filter takes the loop-closed geometry: the robot moves to the

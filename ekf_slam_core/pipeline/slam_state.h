@@ -47,7 +47,7 @@ constexpr uint32_t kSlamStateVersion = 1;
 struct BackEndLinkState {
   LoopCloserState closer;
   std::vector<Pose2> key_filtered;                 // the filter's pose at each key scan (map)
-  std::vector<std::pair<int, int>> landmark_scan;  // landmark id → the scan that created it
+  std::vector<std::pair<int, int>> landmark_scan;  // landmark id → the scan last observing it
   bool has_map_from_graph = false;
   Pose2 map_from_graph;  // the graph's frame in the map frame
   Pose2 last_front_end;  // the front end's pose at the last scan (the closer's frame)
