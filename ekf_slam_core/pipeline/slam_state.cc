@@ -55,6 +55,10 @@ class Writer {
     item(p.y);
     item(p.theta);
   }
+  void item(Vector2& p) {
+    item(p.x());
+    item(p.y());
+  }
   void item(std::string& s) {
     putUnsigned(s.size(), 8, &bytes_);
     bytes_ += s;
@@ -94,6 +98,10 @@ class Reader {
     item(p.x);
     item(p.y);
     item(p.theta);
+  }
+  void item(Vector2& p) {
+    item(p.x());
+    item(p.y());
   }
   void item(std::string& s) {
     const size_t n = fits(take(8), 1);
@@ -190,10 +198,7 @@ template <class Archive>
 void describe(Archive& a, LoopCloserState& s) {
   list(a, s.keys, 24 + 8 + 8 * 5, [&](LoopCloserState::Key& k) {
     a.item(k.front_end);
-    list(a, k.points, 16, [&](Vector2& p) {
-      a.item(p.x());
-      a.item(p.y());
-    });
+    list(a, k.points, 16, [&](Vector2& p) { a.item(p); });
     a.item(k.travel_from_previous);
     a.item(k.retry_after);
     a.item(k.scan_index);
@@ -270,8 +275,7 @@ void describe(Archive& a, FilterState& f) {
     a.item(l.observations);
     a.item(l.created_step);
     a.item(l.last_seen_step);
-    a.item(l.first_estimate.x());
-    a.item(l.first_estimate.y());
+    a.item(l.first_estimate);
   });
   if constexpr (Archive::kReading) {
     for (int slot = 0; slot < f.landmarkCount(); ++slot) f.slot_of_id[f.landmarks[slot].id] = slot;
@@ -280,8 +284,7 @@ void describe(Archive& a, FilterState& f) {
   a.item(f.step);
   for (int i = 0; i < 9; ++i) a.item(f.last_F(i / 3, i % 3));
   a.item(f.have_prior_position);
-  a.item(f.prior_position.x());
-  a.item(f.prior_position.y());
+  a.item(f.prior_position);
   a.item(f.mapping_enabled);
 }
 
@@ -309,14 +312,8 @@ void describe(Archive& a, SlamState& s) {
   a.item(s.front_end.last_corrected);
   a.item(s.front_end.last_key_pose);
   a.item(s.front_end.last_stamp);
-  list(a, s.front_end.map_points, 16, [&](Vector2& p) {
-    a.item(p.x());
-    a.item(p.y());
-  });
-  list(a, s.front_end.map_normals, 16, [&](Vector2& p) {
-    a.item(p.x());
-    a.item(p.y());
-  });
+  list(a, s.front_end.map_points, 16, [&](Vector2& p) { a.item(p); });
+  list(a, s.front_end.map_normals, 16, [&](Vector2& p) { a.item(p); });
   a.item(s.scans);
   a.item(s.has_last_iteration);
   a.item(s.last_stamp);

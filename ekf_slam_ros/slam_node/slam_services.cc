@@ -131,6 +131,17 @@ class LowerPriority : public ros::CallbackInterface {
 // The reply of a slow service that the node's shutdown interrupted.
 const char* const kShuttingDown = "the node is shutting down (nothing done)";
 
+// A service's refusal as a callable: the reply names the problem and what
+// happened instead (`outcome`), and the node logs it as a warning.
+template <class Response>
+auto refusal(Response& response, const char* service, const char* outcome) {
+  return [&response, service, outcome](const std::string& problem) {
+    response.message = problem + " (" + outcome + ")";
+    ROS_WARN("ekf_slam_node: %s: %s", service, response.message.c_str());
+    return true;
+  };
+}
+
 std::string withoutLeadingSlash(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
@@ -247,11 +258,7 @@ bool SlamServices::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
     response.message = "path is empty";
     return true;
   }
-  auto refuse = [&response](const std::string& problem) {
-    response.message = problem + " (nothing saved)";
-    ROS_WARN("ekf_slam_node: save_map: %s", response.message.c_str());
-    return true;
-  };
+  const auto refuse = refusal(response, "save_map", "nothing saved");
   // A path that is not a regular file (a directory, a device, a pipe) is
   // refused before the map is copied (writeMapSet checks them again).
   const MapSetPaths paths = mapSetPaths(request.path);
@@ -305,11 +312,7 @@ bool SlamServices::onDynamicMap(nav_msgs::GetMap::Request&, nav_msgs::GetMap::Re
 bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& response) {
   response.success = false;
   response.landmarks = 0;
-  auto refuse = [&](const std::string& problem) {
-    response.message = problem + " (the current map is kept)";
-    ROS_WARN("ekf_slam_node: load_map: %s", response.message.c_str());
-    return true;
-  };
+  const auto refuse = refusal(response, "load_map", "the current map is kept");
   // The files are read here, off the spin thread, after a save of them
   // that stopped after its commit has been completed.
   const std::string grid_path = mapSetPaths(request.path).grid;
@@ -368,11 +371,7 @@ bool SlamServices::onLoadMap(LoadMap::Request& request, LoadMap::Response& respo
 
 bool SlamServices::onWriteState(StateFile::Request& request, StateFile::Response& response) {
   response.success = false;
-  auto refuse = [&response](const std::string& problem) {
-    response.message = problem + " (nothing written)";
-    ROS_WARN("ekf_slam_node: write_state: %s", response.message.c_str());
-    return true;
-  };
+  const auto refuse = refusal(response, "write_state", "nothing written");
   if (request.path.empty()) return refuse("path is empty");
   if (const std::string problem = writeTargetProblem(request.path); !problem.empty()) {
     return refuse(problem);
@@ -396,11 +395,7 @@ bool SlamServices::onWriteState(StateFile::Request& request, StateFile::Response
 
 bool SlamServices::onLoadState(StateFile::Request& request, StateFile::Response& response) {
   response.success = false;
-  auto refuse = [&response](const std::string& problem) {
-    response.message = problem + " (the current map is kept)";
-    ROS_WARN("ekf_slam_node: load_state: %s", response.message.c_str());
-    return true;
-  };
+  const auto refuse = refusal(response, "load_state", "the current map is kept");
   // Read and checked here, off the spin thread.
   SlamState state;
   std::string error = readSlamState(request.path, &state);

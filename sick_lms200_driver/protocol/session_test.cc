@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <string>
+#include <vector>
 
 #include "serial_io/serial_port.h"
 #include "sick_lms200_driver/emulator/lms200_emulator.h"
@@ -203,46 +205,42 @@ TEST(Session, ChangesUnitsOnADeviceThatAnswersTheWriteAfterThreeSeconds) {
   });
 }
 
-TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
-  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_c");
+// initialize() at 9600 against an emulator that never answers, after it
+// has sent `first` as if from the sensor (say, a late reply): the
+// session's error ("initialised" if it succeeded).
+std::string errorAgainstASilentSensor(const std::string& link,
+                                      const std::vector<uint8_t>& first = {}) {
+  EmulatorOnPty emulator(EmulatorOptions{}, link);
   emulator.locked([](Lms200Emulator& e, auto&) {
     e.setSilent(true);
     return 0;
   });
   serial_io::SerialPort port;
-  ASSERT_TRUE(port.open(emulator.device(), 9600));
+  if (!port.open(emulator.device(), 9600)) return "cannot open the emulator's device";
+  if (!first.empty()) emulator.sendAsSensor(first);
   TelegramDecoder decoder(kSensorAddress);
   SessionOptions options;
   options.probe_bauds = {9600, 38400};
   Session session(
       port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
-  EXPECT_FALSE(session.initialize());
-  EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
+  return session.initialize() ? "initialised" : session.error();
+}
+
+TEST(Session, FailsWithAClearMessageWhenNothingAnswers) {
+  const std::string error = errorAgainstASilentSensor("/tmp/lms200_session_test_c");
+  EXPECT_NE(error.find("no LMS200 answers"), std::string::npos) << error;
 }
 
 // A reply that arrives after the host has moved to another rate (late for
 // the rate it answered) must not be taken for the sensor's rate: the probe
 // confirms with a second request, which a silent sensor leaves unanswered.
 TEST(Session, DoesNotTakeALateReplyForTheSensorsRate) {
-  EmulatorOnPty emulator(EmulatorOptions{}, "/tmp/lms200_session_test_late");
-  emulator.locked([](Lms200Emulator& e, auto&) {
-    e.setSilent(true);
-    return 0;
-  });
   std::vector<uint8_t> late{kAck};
   const std::vector<uint8_t> reply = encodeTelegram(
       kSensorAddress, static_cast<uint8_t>(cmd::kModeChange + kReplyOffset), {0x00, 0x10});
   late.insert(late.end(), reply.begin(), reply.end());
-  serial_io::SerialPort port;
-  ASSERT_TRUE(port.open(emulator.device(), 9600));
-  emulator.sendAsSensor(late);
-  TelegramDecoder decoder(kSensorAddress);
-  SessionOptions options;
-  options.probe_bauds = {9600, 38400};
-  Session session(
-      port, [&](int baud) { return port.setBaud(baud); }, decoder, options);
-  EXPECT_FALSE(session.initialize());
-  EXPECT_NE(session.error().find("no LMS200 answers"), std::string::npos) << session.error();
+  const std::string error = errorAgainstASilentSensor("/tmp/lms200_session_test_late", late);
+  EXPECT_NE(error.find("no LMS200 answers"), std::string::npos) << error;
 }
 
 TEST(Session, RejectsImpossibleOptionsNamingTheField) {

@@ -28,6 +28,7 @@ tools/ci/install_deps.sh           # make: installs the Debian packages a build 
 tools/ci/run_benchmarks.sh         # make bench: runs the bench workspace's benchmarks, never installed
 tools/ci/run_dataset_benchmark.sh  # make benchmark: reads ../shared/datasets beside the checkout
 tools/ci/run_demo.sh               # make demo: starts the source tree's tools/dev/sim_monitor.py
+tools/ci/run_sim_scored.sh         # make demo and tools/dev: starts the source tree's tools/dev/sim_monitor.py
 tools/ci/run_fuzzers.sh            # make fuzz: runs a fuzz workspace on test/fuzz_corpus
 tools/ci/update_results_doc.py     # writes make benchmark's tables into the source tree's docs
 tools/dev/landmark_comparison.sh   # make landmark-comparison: reads ../shared/datasets beside the checkout

@@ -12,11 +12,6 @@ set -euo pipefail
 map=$(cd "$(dirname "${1:?usage: localization_check.sh MAP OUT}")" && pwd)/$(basename "$1")
 out=$(mkdir -p "${2:?usage: localization_check.sh MAP OUT}" && cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
-port=${LOCALIZATION_ROS_PORT:-11473}
-export ROS_MASTER_URI=http://localhost:$port
-export ROS_HOME=${ROS_HOME:-$out/ros_home}
-log=$out/localization_launch.log
-rm -f "$out/report.txt"
 launch=$out/localization_check.launch
 # The simulation's own SLAM configuration: the one the map was made with.
 cat > "$launch" <<LAUNCH
@@ -33,15 +28,6 @@ cat > "$launch" <<LAUNCH
 </launch>
 LAUNCH
 echo "localization_check: office world, one loop localising in $map"
-roslaunch -p "$port" "$launch" > "$log" 2>&1 &
-launch_pid=$!
-cleanup() { kill -INT "$launch_pid" 2>/dev/null || true; wait "$launch_pid" 2>/dev/null || true; }
-trap cleanup EXIT
-status=0
-/usr/bin/python3 "$root/tools/dev/sim_monitor.py" --out "$out" --world office --timeout 900 || status=$?
-if [ $status -ne 0 ]; then
-  echo "localization_check: the run did not complete; the launch log is $log" >&2
-  tail -n 30 "$log" >&2
-  exit $status
-fi
+"$root/tools/ci/run_sim_scored.sh" localization "$out" office "${LOCALIZATION_ROS_PORT:-11473}" \
+  "$launch"
 cat "$out/report.txt"
