@@ -80,3 +80,13 @@ function(ekf_slam_add_program_script file)
 endfunction()
 
 
+
+# ekf_slam_add_program_data(<file>)
+# A data file a program reads from its own folder (for example the offline
+# runner's presets): copied and installed as ekf_slam_add_program_script
+# does, without the executable bit.
+function(ekf_slam_add_program_data file)
+  get_filename_component(name ${file} NAME)
+  configure_file(${file} ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION}/${name} COPYONLY)
+  install(FILES ${file} DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endfunction()

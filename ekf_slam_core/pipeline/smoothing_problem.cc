@@ -14,6 +14,10 @@ std::vector<StampedPose> solveSmoothing(const ScanHistory& history, const EkfSla
                                         const std::vector<Pose2>& initial,
                                         const FullSmootherOptions& options,
                                         FullSmootherResult* details, LandmarkGraph* last_problem) {
+  if (options.method == SmootherMethod::kRts) {
+    if (details) *details = FullSmootherResult();
+    return history.rtsScanPoses();
+  }
   const FullSmootherRecorder& record = history.smootherRecord();
   FullSmootherResult result;
   if (history.firstIteration() > 0 && !initial.empty()) {

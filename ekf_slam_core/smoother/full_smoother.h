@@ -42,7 +42,18 @@ enum class SmootherMotion {
   kLocalMatch,  // the scan matcher against the last key scans alone
 };
 
+// Which smoother gives a run's smoothed trajectory.
+enum class SmootherMethod {
+  kFull,  // the batch smoother below: every pose, landmark, sighting and loop
+  kRts,   // the thesis's Rauch-Tung-Striebel pass over the pose alone (§3.4.5)
+};
+
 struct FullSmootherOptions {
+  // kRts: the smoothed trajectory (the offline trajectory_smoothed.txt and
+  // its map, the live ~smooth) is the RTS pass over the filter's recorded
+  // pose steps, and the options below are not used.
+  SmootherMethod method = SmootherMethod::kFull;
+
   // Motion edges. With a global-map front end (scan_matching.map_mode:
   // global) the control is each scan matched against every key scan so
   // far; where that map holds an old mistake (a stall in a corridor, a
@@ -141,6 +152,7 @@ struct FullSmootherOptions {
     const Choices<RobustKernel> kernels = {{RobustKernel::kNone, "none"},
                                            {RobustKernel::kHuber, "huber"},
                                            {RobustKernel::kCauchy, "cauchy"}};
+    v.choice("method", method, {{SmootherMethod::kFull, "full"}, {SmootherMethod::kRts, "rts"}});
     v.choice("motion_edges", motion_edges,
              {{SmootherMotion::kControl, "control"}, {SmootherMotion::kLocalMatch, "local_match"}});
     v.integer("local_match_key_scans", local_match_key_scans, Bounds::closed(1, 1000, "scans"));

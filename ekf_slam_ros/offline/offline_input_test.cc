@@ -83,6 +83,34 @@ TEST(SlamConfig, ShippedFileIsExactlyTheBuiltInDefaults) {
   EXPECT_FALSE(config.laser_pose_given);
 }
 
+// The thesis preset is the thesis's mode and nothing else: over the
+// built-in defaults it changes exactly the control (raw odometry, no scan
+// matcher), the back end (none), the landmarks (corners and θ-only lines)
+// and the smoother (RTS, which the final map is drawn from without loop
+// closure); the association is nearest neighbour. Laid over the
+// simulator's file it keeps that file's motion noise.
+TEST(SlamConfig, ThesisPresetIsTheThesissModeAndNothingElse) {
+  SlamConfig thesis;
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_thesis.yaml", &thesis), "");
+  EXPECT_FALSE(thesis.pipeline.scan_matching.enabled);
+  EXPECT_FALSE(thesis.pipeline.loop_closure.enabled);
+  EXPECT_EQ(thesis.pipeline.association.method, AssociationMethod::kNearestNeighbour);
+  EXPECT_EQ(thesis.pipeline.smoother.method, SmootherMethod::kRts);
+  EXPECT_EQ(linesNotIn(describeSlamConfig(thesis), describeSlamConfig(SlamConfig())),
+            "  pipeline.landmarks: points+lines_theta\n"
+            "  scan_matching.enabled: false\n"
+            "  loop_closure.enabled: false\n"
+            "  smoother.method: rts\n");
+
+  SlamConfig sim, sim_thesis;
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_sim.yaml", &sim), "");
+  sim_thesis = sim;
+  ASSERT_EQ(loadSlamConfigFile(kSource + "/config/ekf_slam_thesis.yaml", &sim_thesis), "");
+  EXPECT_EQ(sim_thesis.pipeline.filter.motion_noise.rot_per_metre,
+            sim.pipeline.filter.motion_noise.rot_per_metre);
+  EXPECT_EQ(sim_thesis.pipeline.smoother.method, SmootherMethod::kRts);
+}
+
 // The comparison above sees every kind of value the loader binds.
 TEST(SlamConfig, DescriptionShowsEveryKindOfValue) {
   SlamConfig config;

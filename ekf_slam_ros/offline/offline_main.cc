@@ -4,23 +4,24 @@
 // order, and is deterministic: the same input gives bit-identical output.
 //
 //   rosrun ekf_slam ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR
-//                                    [--config YAML] [--max-scans N] [--first-scan N]
+//                                    [--config YAML] [--preset NAME] [--max-scans N] [--first-scan
+//                                    N]
 //                                    [--no-figures] [--trace] [--export-graphs DIR]
 //                                    [--save-state FILE] [--resume FILE [--localize-only]]
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt (the full
 // smoother: batch MAP over every pose, landmark and observation the filter
-// used), trajectory_rts.txt (the thesis's RTS smoother over the pose alone),
-// trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's
-// header stamp with 6 decimals), covariance_filtered.txt (the filter's pose
-// covariance per scan, for NEES checks), landmarks.yaml, map.pgm + map.yaml (from the
-// final trajectory: loop-closed with loop closure on, else smoothed), map_filtered.*,
-// map_odometry.*, the figures and report.txt. report.txt is written last: a directory without it
-// holds no complete result. --export-graphs DIR also writes, into DIR, the problems of the last two
-// optimisations (ekf_slam_core/pose_graph/graph_io.h gives the formats), to be solved again by
-// other solvers (docs/solvers.md): pose_graph.txt, the loop-closure pose graph as the back end's
-// final optimisation started from (when a loop was closed), pose_graph_cold.txt, the same graph
-// started from the front end's key-scan poses, and landmark_graph.txt, the full smoother's last
+// used; the RTS pass with smoother.method: rts), trajectory_rts.txt (the thesis's RTS smoother over
+// the pose alone), trajectory_odometry.txt (one line per scan: "stamp x y theta", the scan's header
+// stamp with 6 decimals), covariance_filtered.txt (the filter's pose covariance per scan, for NEES
+// checks), landmarks.yaml, map.pgm + map.yaml (from the final trajectory: loop-closed with loop
+// closure on, else smoothed), map_filtered.*, map_odometry.*, the figures and report.txt.
+// report.txt is written last: a directory without it holds no complete result. --export-graphs DIR
+// also writes, into DIR, the problems of the last two optimisations
+// (ekf_slam_core/pose_graph/graph_io.h gives the formats), to be solved again by other solvers
+// (docs/solvers.md): pose_graph.txt, the loop-closure pose graph as the back end's final
+// optimisation started from (when a loop was closed), pose_graph_cold.txt, the same graph started
+// from the front end's key-scan poses, and landmark_graph.txt, the full smoother's last
 // optimisation as it started; with pose_graph_scans.txt and landmark_graph_scans.txt, the scan
 // anchors that turn a solution into one pose per scan (as trajectory_optimized.txt and
 // trajectory_smoothed.txt are made from the run's own solutions). --save-state FILE writes the
@@ -72,12 +73,15 @@ std::string programDir() {
 
 void usage(std::ostream& out = std::cerr) {
   out << "usage: ekf_slam_offline (--bag FILE | --carmen FILE) --out DIR [--config YAML]\n"
-         "                        [--max-scans N] [--first-scan N] [--no-figures] [--no-maps]\n"
+         "                        [--preset NAME] [--max-scans N] [--first-scan N] [--no-figures] "
+         "[--no-maps]\n"
          "                        [--trace] [--export-graphs DIR] [--save-state FILE]\n"
          "                        [--resume FILE [--localize-only]]\n"
-         "       ekf_slam_offline [--config YAML] --print-config\n"
+         "       ekf_slam_offline [--config YAML] [--preset NAME] --print-config\n"
          "       ekf_slam_offline --help\n"
          "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
+         "  --preset: a named mode laid over that (config/ekf_slam_NAME.yaml): thesis,\n"
+         "             the thesis's EKF-SLAM (odometry control, corners and lines, RTS)\n"
          "  --print-config: every parameter with the value it would run with, then exit\n"
          "  --no-maps: trajectories, landmarks and the report only (no occupancy grids,\n"
          "             no figures): the fastest run, for scoring trajectories\n"
@@ -280,7 +284,7 @@ std::string wheelEdgesLine(const ekf_slam::WheelNoise& wheels) {
 
 // The command line.
 struct Arguments {
-  std::string bag_path, carmen_path, out_dir, config_path, export_dir, save_state, resume;
+  std::string bag_path, carmen_path, out_dir, config_path, preset, export_dir, save_state, resume;
   long max_scans = -1;
   long first_scan = 0;
   bool figures = true;
@@ -304,6 +308,8 @@ int parseArguments(int argc, char** argv, Arguments* a) {
       a->out_dir = argv[++i];
     } else if (arg == "--config" && i + 1 < argc) {
       a->config_path = argv[++i];
+    } else if (arg == "--preset" && i + 1 < argc) {
+      a->preset = argv[++i];
     } else if (arg == "--max-scans" && i + 1 < argc) {
       a->max_scans = std::atol(argv[++i]);
     } else if (arg == "--first-scan" && i + 1 < argc) {
@@ -638,7 +644,12 @@ void reportLandmarks(const ekf_slam::SlamConfig& config, const ekf_slam::SlamPip
          << "\n";
 }
 
-void reportSmoother(const Trajectories& t, std::ostream& report) {
+void reportSmoother(const Trajectories& t, ekf_slam::SmootherMethod method, std::ostream& report) {
+  if (method == ekf_slam::SmootherMethod::kRts) {
+    report << "smoother: RTS over the pose alone (smoother.method: rts), " << t.rts.size()
+           << " poses, " << t.smoothing_seconds << " s\n";
+    return;
+  }
   const ekf_slam::FullSmootherResult& smoother = t.smoother;
   report << "full smoother: " << smoother.poses.size() << " poses, " << smoother.landmarks.size()
          << " landmarks ("
@@ -677,11 +688,19 @@ int main(int argc, char** argv) {
   Arguments args;
   if (const int exit_code = parseArguments(argc, argv, &args); exit_code >= 0) return exit_code;
   ekf_slam::SlamConfig config;
-  if (!args.config_path.empty()) {
-    const std::string error = ekf_slam::loadSlamConfigFile(args.config_path, &config);
+  // The built-in defaults, then --config, then the preset over both.
+  const std::string preset_path =
+      args.preset.empty() ? "" : programDir() + "/ekf_slam_" + args.preset + ".yaml";
+  if (!preset_path.empty() && ::access(preset_path.c_str(), R_OK) != 0) {
+    std::cerr << "ekf_slam_offline: no preset '" << args.preset << "' (" << preset_path
+              << " is not readable; the presets are config/ekf_slam_<name>.yaml)\n";
+    return 1;
+  }
+  for (const std::string& path : {args.config_path, preset_path}) {
+    if (path.empty()) continue;
+    const std::string error = ekf_slam::loadSlamConfigFile(path, &config);
     if (!error.empty()) {
-      std::cerr << "ekf_slam_offline: bad configuration " << args.config_path << ":\n"
-                << error << "\n";
+      std::cerr << "ekf_slam_offline: bad configuration " << path << ":\n" << error << "\n";
       return 1;
     }
   }
@@ -738,7 +757,7 @@ int main(int argc, char** argv) {
   reportInput(args, config, log, report);
   reportFrontAndBackEnd(config, pipeline, report);
   reportLandmarks(config, pipeline, report);
-  reportSmoother(trajectories, report);
+  reportSmoother(trajectories, config.pipeline.smoother.method, report);
   reportTimes(log, secondsSince(wall_start), processing, report);
   std::cout << report.str();
   // Last, and whole or not at all: a report says the run's files are there.
