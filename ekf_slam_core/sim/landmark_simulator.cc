@@ -45,12 +45,12 @@ Matrix2 LandmarkSimulator::observationCovariance() const {
   return r;
 }
 
-bool LandmarkSimulator::next() {
+bool LandmarkSimulator::next(const Pose2* steer_by) {
   if (lap_ >= options_.laps) return false;
   const Vector2 target = options_.waypoints[next_waypoint_];
-  const Pose2& pose = current_.true_pose;
-  const Vector2 delta = target - pose.translation();
-  const double heading_error = wrapAngle(std::atan2(delta.y(), delta.x()) - pose.theta);
+  const Pose2 believed = steer_by ? *steer_by : current_.true_pose;
+  const Vector2 delta = target - believed.translation();
+  const double heading_error = wrapAngle(std::atan2(delta.y(), delta.x()) - believed.theta);
 
   // Turn toward the waypoint, then drive; both limited per step.
   OdometryControl u;
@@ -58,7 +58,7 @@ bool LandmarkSimulator::next() {
   if (std::abs(heading_error) < 0.3) {
     u.trans = std::min(delta.norm(), options_.max_step_translation);
   }
-  current_.true_pose = applyControl(pose, u);
+  current_.true_pose = applyControl(current_.true_pose, u);
 
   // The odometry measures the control with noise of covariance Q(u).
   const Matrix3 q = controlCovariance(u, options_.odometry_noise);
@@ -70,7 +70,8 @@ bool LandmarkSimulator::next() {
   current_.odometry = applyControl(current_.odometry, measured);
   current_.stamp += options_.dt;
 
-  if ((target - current_.true_pose.translation()).norm() < options_.waypoint_tolerance) {
+  const Pose2 after = steer_by ? applyControl(believed, u) : current_.true_pose;
+  if ((target - after.translation()).norm() < options_.waypoint_tolerance) {
     next_waypoint_ = (next_waypoint_ + 1) % options_.waypoints.size();
     if (next_waypoint_ == 1) ++lap_;
   }

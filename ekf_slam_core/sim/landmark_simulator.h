@@ -49,8 +49,12 @@ class LandmarkSimulator {
 
   // The state before the first motion (step 0: observations from the start pose).
   const SimStep& current() const { return current_; }
-  // Advances one step; false when the last lap is complete.
-  bool next();
+  // Advances one step; false when the last lap is complete. The robot
+  // steers for the next waypoint from `steer_by` (its estimate of its pose;
+  // default the true pose), so that with an estimate its true path strays
+  // as the estimate does, and a waypoint counts as reached where the robot
+  // believes it is.
+  bool next(const Pose2* steer_by = nullptr);
 
   const std::vector<Vector2>& landmarks() const { return options_.landmarks; }
   const LandmarkSimOptions& options() const { return options_; }

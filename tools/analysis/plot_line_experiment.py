@@ -49,7 +49,7 @@ def read_runs(path):
         for line in f:
             if line.startswith("#") or not line.strip():
                 continue
-            name, _seed, mean_pos, final_pos, mean_point = line.split()
+            name, _seed, mean_pos, final_pos, mean_point = line.split()[:5]
             runs.setdefault(name, []).append(
                 (float(mean_pos), float(final_pos), float(mean_point)))
     return {k: np.array(v) for k, v in runs.items()}

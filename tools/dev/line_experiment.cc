@@ -1,8 +1,9 @@
 // ekf_slam_line_experiment: the line-feature simulation of the thesis
 // (§4.3.5, Figs. 4.1–4.4) with this filter. A 22 m × 22 m room with sparse
 // point features and walls; the robot drives a closed path of about 98 m
-// once; the filter runs with known association (ground-truth ids) in four
-// variants that differ only in the features it uses:
+// once; the filter runs with known association (ground-truth ids; see
+// --association below) in six variants that differ only in the features it
+// uses:
 //   points                 the 24 point features alone
 //   ptheta_lines           points + walls as (p, θ) lines (kLine)
 //   theta_lines            points + walls as θ-only lines (kLineAngle), the
@@ -42,10 +43,29 @@
 // not state its simulation's noise). The filter is told the true noise.
 //
 //   ekf_slam_line_experiment --out DIR [--runs N] [--seed S]
-//                            [--odometry-noise-scale F]
+//                            [--odometry-noise-scale F] [--association nn]
+//                            [--line-noise endpoints] [--occlusion]
+//                            [--steer-by-estimate]
 //
 // Runs use seeds S, S+1, … (default 1); F (default 1) multiplies the
 // odometry noise's standard deviations, in the simulator and the filter.
+// The other options bring the run nearer the thesis's own (§4.3.5), where
+// its explanations can be tested:
+//   --association nn        the points are associated by nearest neighbour
+//                           with the ln|S| term (filter/data_association.h),
+//                           not by their true identity; a pairing with
+//                           another feature's landmark counts as wrong. The
+//                           walls keep their identity (seven walls far
+//                           apart: their association is not in question).
+//   --line-noise endpoints  a wall is measured as the line through its two
+//                           visible end readings (range-bearing noise as a
+//                           point's), with the covariance T R Tᵀ of the
+//                           thesis's eqs. 4.31-4.34, instead of a Gaussian in
+//                           (p, θ) the filter is told exactly.
+//   --occlusion             walls hide the points behind them.
+//   --steer-by-estimate     the robot steers for its waypoints by the
+//                           filter's pose, so a wrong estimate takes it off
+//                           the planned path, as a real robot.
 //
 // Writes into DIR, per variant V:
 //   V.txt         per step, means over the runs: step time_s pos_err_m
@@ -59,10 +79,10 @@
 //                 "line i theta_true p_true theta_est p_est" (θ-only lines:
 //                 p from the estimated end points, nan without them)
 // and runs.txt (per variant and seed: mean_pos_err_m final_pos_err_m
-// mean_point_err_m), mecp.txt (per MECP variant: how many scans gave an
-// update, how many were skipped and why, the MECP innovations' mean NIS),
-// world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and
-// summary.txt (one line per variant; columns named in its header).
+// mean_point_err_m wrong_associations duplicate_landmarks), mecp.txt (per MECP variant: how many
+// scans gave an update, how many were skipped and why, the MECP innovations' mean NIS), world.txt
+// (the walls "wall x1 y1 x2 y2" and points "point x y") and summary.txt (one line per variant;
+// columns named in its header; the options of the run on its first line).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -76,6 +96,7 @@
 #include <vector>
 
 #include "ekf_slam_core/filter/chi_square.h"
+#include "ekf_slam_core/filter/data_association.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/mecp/mecp_update.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
@@ -102,6 +123,47 @@ constexpr double kMinVisibleLength = 1.0;  // m of wall inside range and view
 constexpr double kLinePSigma = 0.02;       // m
 constexpr double kLineThetaSigma = 0.01;   // rad
 const double kNan = std::numeric_limits<double>::quiet_NaN();
+
+// The options beyond ExperimentOptions (see the top of the file).
+struct Conditions {
+  bool nearest_neighbour = false;
+  bool endpoint_lines = false;
+  bool occlusion = false;
+  bool steer_by_estimate = false;
+
+  std::string describe() const {
+    return std::string("association ") + (nearest_neighbour ? "nn" : "known") + ", line noise " +
+           (endpoint_lines ? "endpoints" : "gaussian") + (occlusion ? ", occlusion" : "") +
+           (steer_by_estimate ? ", steering by the estimate" : "");
+  }
+};
+
+// Takes this file's options out of argv (the rest is ExperimentOptions').
+// False on a bad value.
+bool takeConditions(int* argc, char** argv, Conditions* c) {
+  int kept = 1;
+  for (int i = 1; i < *argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < *argc;
+    if (arg == "--association" && has_value) {
+      const std::string v = argv[++i];
+      if (v != "nn" && v != "known") return false;
+      c->nearest_neighbour = v == "nn";
+    } else if (arg == "--line-noise" && has_value) {
+      const std::string v = argv[++i];
+      if (v != "endpoints" && v != "gaussian") return false;
+      c->endpoint_lines = v == "endpoints";
+    } else if (arg == "--occlusion") {
+      c->occlusion = true;
+    } else if (arg == "--steer-by-estimate") {
+      c->steer_by_estimate = true;
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  *argc = kept;
+  return true;
+}
 
 struct Wall {
   int end[2];  // indices into points()
@@ -161,9 +223,16 @@ PolarLine wallLine(const Wall& wall) {
   return PolarLine{p, std::atan2(n.y(), n.x())};
 }
 
-// Length of the part of segment a–b within kMaxRange of the sensor and
-// inside its field of view (a wedge of at most π about its x axis).
-double visibleLength(const Pose2& sensor, const Vector2& a, const Vector2& b) {
+// The part of segment a–b within kMaxRange of the sensor and inside its
+// field of view (a wedge of at most π about its x axis): a + t (b − a) for
+// t in [lo, hi]; empty when hi <= lo.
+struct Stretch {
+  double lo = 0.0, hi = 0.0;
+  double length(const Vector2& a, const Vector2& b) const {
+    return hi > lo ? (hi - lo) * (b - a).norm() : 0.0;
+  }
+};
+Stretch visibleStretch(const Pose2& sensor, const Vector2& a, const Vector2& b) {
   const Vector2 s = sensor.translation();
   const Vector2 u = b - a, w = a - s;
   double lo = 0.0, hi = 1.0;
@@ -190,10 +259,77 @@ double visibleLength(const Pose2& sensor, const Vector2& a, const Vector2& b) {
   const double qa = u.squaredNorm(), qb = 2.0 * w.dot(u),
                qc = w.squaredNorm() - kMaxRange * kMaxRange;
   const double disc = qb * qb - 4.0 * qa * qc;
-  if (disc <= 0.0) return 0.0;
+  if (disc <= 0.0) return {};
   lo = std::max(lo, (-qb - std::sqrt(disc)) / (2.0 * qa));
   hi = std::min(hi, (-qb + std::sqrt(disc)) / (2.0 * qa));
-  return hi > lo ? (hi - lo) * std::sqrt(qa) : 0.0;
+  return {lo, hi};
+}
+
+// Whether the open segments p–q and a–b cross.
+bool crosses(const Vector2& p, const Vector2& q, const Vector2& a, const Vector2& b) {
+  auto side = [](const Vector2& o, const Vector2& d, const Vector2& x) {
+    const Vector2 w = x - o;
+    return d.x() * w.y() - d.y() * w.x();
+  };
+  const double s1 = side(p, q - p, a), s2 = side(p, q - p, b);
+  const double s3 = side(a, b - a, p), s4 = side(a, b - a, q);
+  return s1 * s2 < 0.0 && s3 * s4 < 0.0;
+}
+
+// Point `i` hidden from `sensor` by a wall it is not an end of.
+bool occluded(const Vector2& sensor, int i) {
+  for (const Wall& w : walls()) {
+    if (w.end[0] == i || w.end[1] == i) continue;
+    if (crosses(sensor, points()[i], points()[w.end[0]], points()[w.end[1]])) return true;
+  }
+  return false;
+}
+
+// The line through two points of the sensor frame given by their range
+// and bearing, (r₁, φ₁, r₂, φ₂), in normal form with p >= 0.
+PolarLine lineThrough(const Eigen::Vector4d& z) {
+  const Vector2 q1 = z(0) * Vector2(std::cos(z(1)), std::sin(z(1)));
+  const Vector2 q2 = z(2) * Vector2(std::cos(z(3)), std::sin(z(3)));
+  const Vector2 d = (q2 - q1).normalized();
+  Vector2 n(-d.y(), d.x());
+  double p = n.dot(q1);
+  if (p < 0.0) {
+    n = -n;
+    p = -p;
+  }
+  return PolarLine{p, std::atan2(n.y(), n.x())};
+}
+
+// A wall measured as the thesis measures it (eqs. 4.31-4.34): its two
+// visible ends read with a point's range-bearing noise, the line through
+// them, and its covariance T R Tᵀ, T = ∂(p, θ)/∂(r₁, φ₁, r₂, φ₂) (central
+// differences at the readings, as the robot would have them).
+LineObservation endpointLine(const Pose2& sensor, const Vector2& e1, const Vector2& e2,
+                             double range_sigma, double bearing_sigma, std::mt19937* rng) {
+  std::normal_distribution<double> unit;
+  Eigen::Vector4d z;
+  for (int k = 0; k < 2; ++k) {
+    const Vector2 local = ekf_slam::transformTo(sensor, k == 0 ? e1 : e2);
+    z(2 * k) = local.norm() + range_sigma * unit(*rng);
+    z(2 * k + 1) = std::atan2(local.y(), local.x()) + bearing_sigma * unit(*rng);
+  }
+  const PolarLine line = lineThrough(z);
+  Eigen::Matrix<double, 2, 4> T;
+  for (int j = 0; j < 4; ++j) {
+    const double h = 1e-6;
+    Eigen::Vector4d plus = z, minus = z;
+    plus(j) += h;
+    minus(j) -= h;
+    const PolarLine a = lineThrough(plus), b = lineThrough(minus);
+    T(0, j) = (a.p - b.p) / (2 * h);
+    T(1, j) = wrapAngle(a.theta - b.theta) / (2 * h);
+  }
+  const Eigen::Vector4d variances(range_sigma * range_sigma, bearing_sigma * bearing_sigma,
+                                  range_sigma * range_sigma, bearing_sigma * bearing_sigma);
+  LineObservation obs;
+  obs.z = line;
+  obs.covariance = T * variances.asDiagonal() * T.transpose();
+  return obs;
 }
 
 enum class Variant {
@@ -247,6 +383,8 @@ struct RunLog {
 // variant sees the same draws of odometry and point noise for a seed).
 struct RunSummary {
   double mean_pos = 0, final_pos = 0, mean_point = 0;
+  long wrong = 0;       // point pairings with another feature's landmark (--association nn)
+  long duplicates = 0;  // landmarks made from a feature that had one already (idem)
 };
 
 struct Refusals {
@@ -283,9 +421,9 @@ double offsetError(double theta_est, double p_est, const PolarLine& truth) {
   return std::abs(p_est - truth.p);
 }
 
-void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<StepStats>* stats,
-             RunLog* log, RunSummary* run, Refusals* refusals, MecpCounts* mecp,
-             std::ofstream* map_out) {
+void runOnce(Variant variant, const Conditions& conditions, unsigned seed, double noise_scale,
+             std::vector<StepStats>* stats, RunLog* log, RunSummary* run, Refusals* refusals,
+             MecpCounts* mecp, std::ofstream* map_out) {
   ekf_slam::sim::LandmarkSimOptions sim_options;
   sim_options.seed = seed;
   sim_options.landmarks = points();
@@ -307,36 +445,72 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
       variant == Variant::kPThetaLines ? LandmarkKind::kLine : LandmarkKind::kLineAngle;
   std::mt19937 line_rng(seed * 104729u + 17u);
   std::normal_distribution<double> unit;
+  // point_id: the landmark made from each point feature first (scored);
+  // feature_of: the feature each landmark was made from (duplicates under
+  // nearest neighbour included).
   std::vector<int> point_id(points().size(), -1), line_id(walls().size(), -1);
+  std::vector<int> feature_of;
+  const ekf_slam::AssociationOptions association;
   Matrix2 line_noise = Matrix2::Zero();
   line_noise(0, 0) = kLinePSigma * kLinePSigma;
   line_noise(1, 1) = kLineThetaSigma * kLineThetaSigma;
 
-  auto observe = [&](const ekf_slam::sim::SimStep& s) {
+  auto observe = [&](const ekf_slam::sim::SimStep& step) {
+    // The points the sensor sees (walls hide some with --occlusion).
+    const Vector2 sensor_at =
+        ekf_slam::transformFrom(step.true_pose, sim_options.laser_pose.translation());
+    std::vector<ekf_slam::PointObservation> seen;
+    std::vector<int> feature;
+    for (size_t i = 0; i < step.observations.size(); ++i) {
+      if (conditions.occlusion && occluded(sensor_at, step.true_landmark[i])) continue;
+      seen.push_back(step.observations[i]);
+      feature.push_back(step.true_landmark[i]);
+    }
     std::vector<PointMatch> matches;
     std::vector<int> fresh;
-    for (size_t i = 0; i < s.observations.size(); ++i) {
-      const int id = point_id[s.true_landmark[i]];
-      if (id >= 0) {
-        matches.push_back({static_cast<int>(i), id});
-      } else {
-        fresh.push_back(static_cast<int>(i));
+    if (conditions.nearest_neighbour) {
+      const ekf_slam::AssociationResult result = ekf_slam::associate(filter, seen, association);
+      matches = result.matches();
+      fresh = result.newLandmarks();
+      for (const PointMatch& m : matches) {
+        const int made_from =
+            m.landmark_id < static_cast<int>(feature_of.size()) ? feature_of[m.landmark_id] : -1;
+        if (made_from != feature[m.observation]) ++run->wrong;
+      }
+    } else {
+      for (size_t i = 0; i < seen.size(); ++i) {
+        const int id = point_id[feature[i]];
+        if (id >= 0) {
+          matches.push_back({static_cast<int>(i), id});
+        } else {
+          fresh.push_back(static_cast<int>(i));
+        }
       }
     }
-    if (!matches.empty() && filter.update(s.observations, matches) != FilterStatus::kOk) {
+    if (!matches.empty() && filter.update(seen, matches) != FilterStatus::kOk) {
       ++refusals->points;
     }
+    std::vector<int> landmark_of(seen.size(), -1);
+    for (const PointMatch& m : matches) landmark_of[m.observation] = m.landmark_id;
     for (int i : fresh) {
-      if (filter.augment(s.observations[i], &point_id[s.true_landmark[i]]) != FilterStatus::kOk) {
+      int id = -1;
+      if (filter.augment(seen[i], &id) != FilterStatus::kOk) {
         ++refusals->augment;
+        continue;
       }
+      if (static_cast<int>(feature_of.size()) <= id) feature_of.resize(id + 1, -1);
+      feature_of[id] = feature[i];
+      if (point_id[feature[i]] < 0) {
+        point_id[feature[i]] = id;
+      } else {
+        ++run->duplicates;
+      }
+      landmark_of[i] = id;
     }
     if (usesMecp(variant)) {
-      // Every reading is a landmark by now (matched, or just added).
-      std::vector<int> ids;
-      for (int feature : s.true_landmark) ids.push_back(point_id[feature]);
+      // The readings matched or just added (-1: neither, left out).
       const ekf_slam::MecpUpdateResult result =
-          ekf_slam::updateWithMecp(&filter, s.observations, ids);
+          ekf_slam::updateWithMecp(&filter, seen, landmark_of);
       switch (result.outcome) {
         case ekf_slam::MecpOutcome::kApplied:
           ++mecp->applied;
@@ -354,23 +528,28 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
       }
     }
     if (!use_lines) return;
-    const Pose2 sensor = ekf_slam::compose(s.true_pose, sim_options.laser_pose);
+    const Pose2 sensor = ekf_slam::compose(step.true_pose, sim_options.laser_pose);
     std::vector<LineObservation> lines;
     std::vector<LineMatch> line_matches;
     for (size_t w = 0; w < walls().size(); ++w) {
       const Wall& wall = walls()[w];
-      if (visibleLength(sensor, points()[wall.end[0]], points()[wall.end[1]]) < kMinVisibleLength) {
-        continue;
-      }
-      PolarLine z;
-      if (!ekf_slam::predictLineObservation(s.true_pose, sim_options.laser_pose, wallLine(wall),
-                                            &z)) {
-        continue;
-      }
+      const Vector2 a = points()[wall.end[0]], b = points()[wall.end[1]];
+      const Stretch visible = visibleStretch(sensor, a, b);
+      if (visible.length(a, b) < kMinVisibleLength) continue;
       LineObservation obs;
-      obs.covariance = line_noise;
-      obs.z.p = z.p + kLinePSigma * unit(line_rng);
-      obs.z.theta = wrapAngle(z.theta + kLineThetaSigma * unit(line_rng));
+      if (conditions.endpoint_lines) {
+        obs = endpointLine(sensor, a + visible.lo * (b - a), a + visible.hi * (b - a),
+                           sim_options.range_sigma, sim_options.bearing_sigma, &line_rng);
+      } else {
+        PolarLine z;
+        if (!ekf_slam::predictLineObservation(step.true_pose, sim_options.laser_pose,
+                                              wallLine(wall), &z)) {
+          continue;
+        }
+        obs.covariance = line_noise;
+        obs.z.p = z.p + kLinePSigma * unit(line_rng);
+        obs.z.theta = wrapAngle(z.theta + kLineThetaSigma * unit(line_rng));
+      }
       if (line_id[w] < 0) {
         if (filter.augmentLine(obs, line_kind, &line_id[w]) != FilterStatus::kOk) {
           ++refusals->augment;
@@ -448,7 +627,9 @@ void runOnce(Variant variant, unsigned seed, double noise_scale, std::vector<Ste
   record(0, sim.current());
   Pose2 odom = sim.current().odometry;
   size_t k = 0;
-  while (sim.next()) {
+  while (true) {
+    const Pose2 estimate = filter.pose();
+    if (!sim.next(conditions.steer_by_estimate ? &estimate : nullptr)) break;
     const ekf_slam::sim::SimStep& s = sim.current();
     if (filter.predict(odom, s.odometry, sim_options.dt) != FilterStatus::kOk) ++refusals->predict;
     odom = s.odometry;
@@ -489,6 +670,12 @@ double ratio(double sum, int count) { return count > 0 ? sum / count : kNan; }
 int main(int argc, char** argv) {
   ekf_slam::ExperimentOptions options;
   options.runs = 30;
+  Conditions conditions;
+  if (!takeConditions(&argc, argv, &conditions)) {
+    std::cerr << "ekf_slam_line_experiment: --association takes nn or known, --line-noise "
+                 "endpoints or gaussian\n";
+    return 2;
+  }
   if (!ekf_slam::parseExperimentOptions(argc, argv, "ekf_slam_line_experiment", &options)) return 2;
   const std::string& out_dir = options.out_dir;
   const int runs = options.runs;
@@ -511,30 +698,35 @@ int main(int argc, char** argv) {
 
   const ekf_slam::ChiSquareBand band = ekf_slam::averageChiSquareBand(3, runs, 0.95);
   std::ofstream summary(dir + "summary.txt");
-  summary << "# variant runs steps mean_pos_err_m final_pos_err_m mean_heading_err_rad "
+  summary << "# " << conditions.describe() << ", odometry noise x" << noise_scale << "\n"
+          << "# variant runs steps mean_pos_err_m final_pos_err_m mean_heading_err_rad "
              "final_heading_err_rad average_nees band_lower band_upper steps_inside_band "
              "consistent mean_point_err_m final_point_err_m final_line_angle_err_rad "
-             "refused_updates\n";
+             "refused_updates wrong_associations_per_run duplicate_landmarks_per_run\n";
   std::ofstream mecp_out(dir + "mecp.txt");
   mecp_out << "# variant scans_applied scans_no_polygon scans_near_centre scans_refused "
               "mean_nis_applied\n";
   std::ofstream per_run(dir + "runs.txt");
-  per_run << "# variant seed mean_pos_err_m final_pos_err_m mean_point_err_m\n";
+  per_run << "# variant seed mean_pos_err_m final_pos_err_m mean_point_err_m wrong_associations "
+             "duplicate_landmarks\n";
   const double dt = ekf_slam::sim::LandmarkSimOptions().dt;
   for (Variant variant : kVariants) {
     const std::string name = variantName(variant);
     std::vector<StepStats> stats;
     Refusals refusals;
     MecpCounts mecp;
+    long wrong = 0, duplicates = 0;
     RunLog log;
     std::ofstream map_out(dir + name + "_map.txt");
     map_out << "# point i x_true y_true x_est y_est | line i theta_true p_true theta_est p_est\n";
     for (int r = 0; r < runs; ++r) {
       RunSummary run;
-      runOnce(variant, first_seed + r, noise_scale, &stats, r == 0 ? &log : nullptr, &run,
-              &refusals, &mecp, r == 0 ? &map_out : nullptr);
+      runOnce(variant, conditions, first_seed + r, noise_scale, &stats, r == 0 ? &log : nullptr,
+              &run, &refusals, &mecp, r == 0 ? &map_out : nullptr);
       per_run << name << ' ' << first_seed + r << ' ' << run.mean_pos << ' ' << run.final_pos << ' '
-              << run.mean_point << '\n';
+              << run.mean_point << ' ' << run.wrong << ' ' << run.duplicates << '\n';
+      wrong += run.wrong;
+      duplicates += run.duplicates;
     }
     if (usesMecp(variant)) {
       mecp_out << name << ' ' << mecp.applied << ' ' << mecp.no_polygon << ' ' << mecp.near_centre
@@ -578,13 +770,14 @@ int main(int argc, char** argv) {
     char line[512];
     std::snprintf(
         line, sizeof line,
-        "%s %d %zu %.4f %.4f %.5f %.5f %.3f %.3f %.3f %.3f %s %.4f %.4f %s %ld\n", name.c_str(),
-        runs, steps, pos_total / steps, last.pos / runs, heading_total / steps, last.heading / runs,
-        average_nees, band.lower, band.upper, static_cast<double>(inside) / (steps - 1),
-        consistent ? "yes" : "no", point_total / std::max(point_steps, 1),
-        ratio(last.point, last.point_runs),
+        "%s %d %zu %.4f %.4f %.5f %.5f %.3f %.3f %.3f %.3f %s %.4f %.4f %s %ld %.2f %.2f\n",
+        name.c_str(), runs, steps, pos_total / steps, last.pos / runs, heading_total / steps,
+        last.heading / runs, average_nees, band.lower, band.upper,
+        static_cast<double>(inside) / (steps - 1), consistent ? "yes" : "no",
+        point_total / std::max(point_steps, 1), ratio(last.point, last.point_runs),
         last.angle_runs > 0 ? std::to_string(last.angle / last.angle_runs).c_str() : "nan",
-        refusals.points + refusals.lines + refusals.augment + refusals.predict);
+        refusals.points + refusals.lines + refusals.augment + refusals.predict,
+        static_cast<double>(wrong) / runs, static_cast<double>(duplicates) / runs);
     summary << line;
     std::cout << line;
   }

@@ -4,7 +4,10 @@
 # ekf_slam_line_experiment and ekf_slam_rooms_experiment and runs each
 # (§4.3.5 with the MECP variant of §4.4; §4.4.5 into OUT_DIR/rooms) with
 # the default odometry noise and with the odometry noise's standard
-# deviations tripled, and plots all four.
+# deviations tripled; then the line experiment again under the thesis's
+# own conditions (nearest-neighbour association of the points, walls
+# measured from their two end readings, occlusion, steering by the
+# estimate) into OUT_DIR/thesis_conditions, and plots all six.
 #
 # usage: line_experiment.sh OUT_DIR [DEVEL_DIR]
 # With DEVEL_DIR (a catkin devel space that holds the built executable)
@@ -35,13 +38,21 @@ rooms_exe=$bin/ekf_slam_rooms_experiment
 for e in "$exe" "$rooms_exe"; do
   [ -x "$e" ] || { echo "line_experiment: no executable at $e" >&2; exit 1; }
 done
-mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x3"
+mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x3" "$out/thesis_conditions/odometry_x3"
 echo "== default odometry noise ($runs runs per variant)"
 "$exe" --out "$out" --runs "$runs"
 /usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out"
 echo "== odometry noise x3"
 "$exe" --out "$out/odometry_x3" --runs "$runs" --odometry-noise-scale 3
 /usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out/odometry_x3"
+thesis_conditions=(--association nn --line-noise endpoints --occlusion --steer-by-estimate)
+echo "== thesis conditions, default odometry noise"
+"$exe" --out "$out/thesis_conditions" --runs "$runs" "${thesis_conditions[@]}"
+/usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out/thesis_conditions"
+echo "== thesis conditions, odometry noise x3"
+"$exe" --out "$out/thesis_conditions/odometry_x3" --runs "$runs" --odometry-noise-scale 3 \
+  "${thesis_conditions[@]}"
+/usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out/thesis_conditions/odometry_x3"
 echo "== rooms, default odometry noise ($rooms_runs runs per mode)"
 "$rooms_exe" --out "$out/rooms" --runs "$rooms_runs"
 /usr/bin/python3 "$root/tools/analysis/plot_rooms_experiment.py" "$out/rooms"
