@@ -84,6 +84,34 @@ TEST_F(AmbiguousScene, JointCompatibilityGetsItRight) {
   EXPECT_NEAR(filter_->pose().x, -0.1, 0.01);
 }
 
+// The ln|S| term decides (thesis §4.2.3): an observation 5 cm from a
+// well-known corner (σ 3 cm) and 0.5 m from an uncertain one (σ 0.5 m)
+// is nearer the uncertain one by d² alone, since its large S shrinks the
+// distance. d² + ln|S| charges it for that uncertainty, and nearest
+// neighbour pairs the observation with the well-known corner.
+TEST(DataAssociation, TheLogDeterminantTermPrefersTheWellKnownLandmark) {
+  FilterOptions options;
+  options.tentative_max_age = 0;
+  EkfSlam filter(options);
+  int known = -1, uncertain = -1;
+  ASSERT_EQ(filter.augment(observed(Pose2(), Vector2(1.0, 0.0), 0.03), &known), FilterStatus::kOk);
+  ASSERT_EQ(filter.augment(observed(Pose2(), Vector2(1.0, 0.55), 0.5), &uncertain),
+            FilterStatus::kOk);
+  const AssociationResult result =
+      associate(filter, {observed(Pose2(), Vector2(1.0, 0.05), 1e-3)}, AssociationOptions());
+  const ObservationAssociation& a = result.observations[0];
+  ASSERT_EQ(a.decision, AssociationDecision::kMatched);
+  EXPECT_EQ(a.landmark_id, known);
+  ASSERT_EQ(a.candidates.size(), 2u) << "both corners inside the gate";
+  const AssociationCandidate& first = a.candidates[0];
+  const AssociationCandidate& second = a.candidates[1];
+  ASSERT_EQ(second.landmark_id, uncertain);
+  EXPECT_LT(second.mahalanobis2, first.mahalanobis2) << "d² alone would take the uncertain one";
+  EXPECT_LT(first.normalised, second.normalised);
+  EXPECT_LT(second.mahalanobis2, result.gate);
+  EXPECT_LT(first.mahalanobis2, result.gate);
+}
+
 TEST(DataAssociation, BetweenTheGatesIsNeitherMatchedNorNew) {
   FilterOptions options;
   options.tentative_max_age = 0;

@@ -2,6 +2,7 @@
 // including bearings near ±π and landmarks close to the robot.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "ekf_slam_core/models/odometry_motion_model.h"
@@ -190,6 +191,29 @@ TEST(PointObservationModel, BearingIsMeasuredInTheLaserFrame) {
   EXPECT_NEAR(z.bearing, 0.0, 1e-12);
   // A landmark at the sensor origin has no bearing: refused, not NaN.
   EXPECT_FALSE(predictPointObservation(Pose2(), Pose2(), Vector2(0, 0), &z));
+}
+
+// The thesis's augmentation Jacobians (eqs. 4.14-4.15) write sin θᵢ and
+// cos θᵢ, θᵢ the measured bearing, where its own inverse model (eq. 4.9)
+// has the absolute bearing θ_v + θᵢ: they are the derivatives of eq. 4.9
+// only for a robot heading along the map's x axis. (The laser on the
+// robot's origin, as in the thesis.)
+TEST(PointObservationModel, PrintedAugmentationJacobiansHoldOnlyAtZeroHeading) {
+  const RangeBearing z{2.0, 0.4};
+  const auto printed = [&z](Matrix23* A_v, Matrix2* A_f) {
+    const double s = std::sin(z.bearing), c = std::cos(z.bearing);
+    *A_v << 1, 0, -z.range * s, 0, 1, z.range * c;
+    *A_f << c, -z.range * s, s, z.range * c;
+  };
+  Matrix23 A_v, G_r;
+  Matrix2 A_f, G_z;
+  printed(&A_v, &A_f);
+  landmarkFromObservation(Pose2(1.0, -2.0, 0.0), Pose2(), z, &G_r, &G_z);
+  EXPECT_TRUE(near(A_v, G_r, 1e-12));
+  EXPECT_TRUE(near(A_f, G_z, 1e-12));
+  landmarkFromObservation(Pose2(1.0, -2.0, 0.7), Pose2(), z, &G_r, &G_z);
+  EXPECT_GT((A_v - G_r).norm(), 0.5);
+  EXPECT_GT((A_f - G_z).norm(), 0.5);
 }
 
 }  // namespace
