@@ -38,7 +38,8 @@ rooms_exe=$bin/ekf_slam_rooms_experiment
 for e in "$exe" "$rooms_exe"; do
   [ -x "$e" ] || { echo "line_experiment: no executable at $e" >&2; exit 1; }
 done
-mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x3" "$out/thesis_conditions/odometry_x3"
+mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x3" "$out/thesis_conditions/odometry_x3" \
+  "$out/thesis_conditions/nn_odometry_x3"
 echo "== default odometry noise ($runs runs per variant)"
 "$exe" --out "$out" --runs "$runs"
 /usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out"
@@ -53,6 +54,10 @@ echo "== thesis conditions, odometry noise x3"
 "$exe" --out "$out/thesis_conditions/odometry_x3" --runs "$runs" --odometry-noise-scale 3 \
   "${thesis_conditions[@]}"
 /usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out/thesis_conditions/odometry_x3"
+echo "== nearest-neighbour association alone, odometry noise x3"
+"$exe" --out "$out/thesis_conditions/nn_odometry_x3" --runs "$runs" --odometry-noise-scale 3 \
+  --association nn
+/usr/bin/python3 "$root/tools/analysis/plot_line_experiment.py" "$out/thesis_conditions/nn_odometry_x3"
 echo "== rooms, default odometry noise ($rooms_runs runs per mode)"
 "$rooms_exe" --out "$out/rooms" --runs "$rooms_runs"
 /usr/bin/python3 "$root/tools/analysis/plot_rooms_experiment.py" "$out/rooms"
