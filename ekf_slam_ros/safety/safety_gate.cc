@@ -160,12 +160,7 @@ GateDecision SafetyGate::filter(const Command& requested, double now) const {
   // "no nearer than now" compares with.
   const double age = std::clamp(now - scan_stamp_, 0.0, options_.scan_timeout);
   const Pose2 start = arcPose(motion_.linear * age, motion_.angular * age);
-  double now_clearance = kInfinity;
-  for (const Vector2& p : points_) {
-    now_clearance = std::min(
-        now_clearance, distanceToFootprint(transformTo(start, p), options_.footprint_front,
-                                           options_.footprint_rear, options_.footprint_half_width));
-  }
+  const double now_clearance = clearanceAlong(Command{}, start, Command{});
   if (safe(out.command, start, now_clearance)) {
     out.closest = clearanceAlong(out.command, start, motion_);
     return out;
