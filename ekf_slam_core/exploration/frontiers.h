@@ -1,0 +1,122 @@
+// Where to explore next on a live occupancy grid (the thesis's next step,
+// §6.5): frontiers, a robot's reach over the grid, and the path to a goal.
+//
+// - The grid is the SLAM node's `/map` as GridMapFile holds it: -1 unknown,
+//   0..100 occupancy; a cell up to `free_max` is free.
+// - A cell is traversable when it is free and no cell above `free_max`
+//   (occupied or uncertain) lies within `robot_radius` of its centre: the
+//   grid inflated by the robot. Unknown cells are not traversable.
+// - reachFrom() runs Dijkstra over the traversable cells (8-connected, steps
+//   of 1 or √2 cells) from the robot's cell: every reachable cell's path
+//   length and its predecessor.
+// - A frontier is a connected group (8-neighbours) of free cells that touch
+//   an unknown cell (4-neighbours), at least `min_frontier_length` long;
+//   its goal is its reachable cell nearest the robot along the grid.
+// - chooseFrontier() prefers finishing the robot's current room (a room
+//   label per position, e.g. from the walls and doorways of
+//   mecp/room_gating.h), then the lowest cost: path length minus
+//   `gain_weight` times the frontier's length.
+// No ROS; the node that drives the robot (its planner loop, the path
+// follower and the safety gate) is above.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ekf_slam_core/geometry/option_fields.h"
+#include "ekf_slam_core/geometry/pose2.h"
+#include "ekf_slam_core/io/grid_map_file.h"
+
+namespace ekf_slam {
+
+struct ExplorationOptions {
+  int free_max = 25;                 // occupancy value up to which a cell is free (0..100)
+  double robot_radius = 0.3;         // m: cells nearer a non-free known cell are not traversable
+  double min_frontier_length = 0.5;  // m of frontier (cells times resolution)
+  double gain_weight = 1.0;          // m of path a metre of frontier is worth
+
+  template <class Visitor>
+  void visitFields(Visitor& v) {
+    v.integer("free_max", free_max, Bounds::closed(0, 99, ""));
+    v.number("robot_radius", robot_radius, Bounds::closed(0.0, 5.0, "m"));
+    v.number("min_frontier_length", min_frontier_length, Bounds::closed(0.0, 100.0, "m"));
+    v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));
+  }
+};
+
+// The grid as the explorer sees it. Cells are numbered row by row from the
+// lower left, as in GridMapFile; the grid's yaw must be 0 (the SLAM node's
+// is).
+class ExplorationGrid {
+ public:
+  ExplorationGrid(const GridMapFile& grid, const ExplorationOptions& options);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int cellCount() const { return width_ * height_; }
+  double resolution() const { return resolution_; }
+  // The cell holding `p` (map frame), or -1 outside the grid.
+  int cellAt(const Vector2& p) const;
+  Vector2 centre(int cell) const;
+
+  bool unknown(int cell) const { return cells_[cell] < 0; }
+  bool free(int cell) const { return cells_[cell] >= 0 && cells_[cell] <= free_max_; }
+  bool traversable(int cell) const { return traversable_[cell]; }
+
+ private:
+  int width_ = 0, height_ = 0;
+  double resolution_ = 0.05;
+  Vector2 origin_ = Vector2::Zero();
+  int free_max_ = 25;
+  std::vector<int8_t> cells_;
+  std::vector<bool> traversable_;
+};
+
+// The robot's reach: per cell the path length from the start (m; +inf
+// where unreachable) and the previous cell on that path (-1 at the start
+// and where unreachable).
+struct Reach {
+  int start = -1;
+  std::vector<double> distance;
+  std::vector<int> previous;
+
+  bool reachable(int cell) const;
+};
+
+// Dijkstra from the cell of `start`. Inside the inflation (a robot next to
+// a wall) the free cells lead out of it: from a cell that is not
+// traversable any free neighbour may be taken, from a traversable one only
+// traversable ones. A start outside the grid or on an unknown or non-free
+// cell reaches nothing.
+Reach reachFrom(const ExplorationGrid& grid, const Vector2& start);
+
+// The path from the reach's start to `cell`, cell centres in the map frame
+// (start first); empty when `cell` is unreachable.
+std::vector<Vector2> pathTo(const ExplorationGrid& grid, const Reach& reach, int cell);
+
+struct Frontier {
+  std::vector<int> cells;
+  Vector2 centroid = Vector2::Zero();  // map frame
+  double length = 0.0;                 // m (cells times resolution)
+  int goal = -1;                       // its reachable cell nearest along the grid; -1: none
+  double distance = 0.0;               // m of path to `goal`; +inf without one
+};
+
+// Every frontier at least options.min_frontier_length long, largest first.
+std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& reach,
+                                    const ExplorationOptions& options);
+
+// The room of a position (map frame), or -1 where none is known.
+using RoomOf = std::function<int(const Vector2&)>;
+
+// The frontier to go to next, as an index into `frontiers`: among the
+// reachable ones, those in the robot's room (room_of at `robot`) first,
+// then the lowest distance − gain_weight × length. None when no frontier
+// is reachable. `room_of` may be empty (no rooms known).
+std::optional<size_t> chooseFrontier(const std::vector<Frontier>& frontiers,
+                                     const ExplorationGrid& grid, const Vector2& robot,
+                                     const RoomOf& room_of, const ExplorationOptions& options);
+
+}  // namespace ekf_slam

@@ -1,0 +1,147 @@
+#include "ekf_slam_core/exploration/frontiers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace ekf_slam {
+namespace {
+
+// A grid drawn in text, top row first: '#' occupied, '.' free, '?' unknown.
+// 0.1 m cells, the lower left corner at the origin.
+GridMapFile drawn(const std::vector<std::string>& rows) {
+  GridMapFile g;
+  g.resolution = 0.1;
+  g.height = static_cast<int>(rows.size());
+  g.width = static_cast<int>(rows[0].size());
+  g.cells.resize(static_cast<size_t>(g.width) * g.height);
+  for (int r = 0; r < g.height; ++r) {
+    for (int x = 0; x < g.width; ++x) {
+      const char c = rows[g.height - 1 - r][x];
+      g.cells[r * g.width + x] = c == '#' ? 100 : (c == '.' ? 0 : -1);
+    }
+  }
+  return g;
+}
+
+// A room of free cells 2 m × 1 m, walled, open to unknown space on its
+// right, with a two-cell pocket of unknown in its floor.
+std::vector<std::string> roomOpenToTheRight() {
+  std::vector<std::string> rows;
+  rows.push_back(std::string(22, '#') + std::string(8, '?'));
+  for (int r = 0; r < 10; ++r) {
+    std::string row = "#" + std::string(21, '.') + std::string(8, '?');
+    if (r == 5) row[6] = row[7] = '?';
+    rows.push_back(row);
+  }
+  rows.push_back(std::string(22, '#') + std::string(8, '?'));
+  return rows;
+}
+
+TEST(Frontiers, FoundAlongTheEdgeOfTheKnownAndSmallOnesLeftOut) {
+  ExplorationOptions options;
+  options.robot_radius = 0.15;
+  const ExplorationGrid grid(drawn(roomOpenToTheRight()), options);
+  const Reach reach = reachFrom(grid, Vector2(0.55, 0.65));
+  const std::vector<Frontier> frontiers = findFrontiers(grid, reach, options);
+  // The open side (ten cells, 1 m) and the pocket (the six free cells
+  // around it, 0.6 m); a 0.9 m minimum leaves the pocket out.
+  ASSERT_EQ(frontiers.size(), 2u);
+  EXPECT_EQ(frontiers[0].cells.size(), 10u);
+  EXPECT_NEAR(frontiers[0].centroid.x(), 2.15, 1e-9);
+  EXPECT_NEAR(frontiers[0].centroid.y(), 0.6, 1e-9);
+  EXPECT_GE(frontiers[0].goal, 0);
+  EXPECT_GT(frontiers[0].distance, 1.4);
+  options.min_frontier_length = 0.9;
+  EXPECT_EQ(findFrontiers(grid, reach, options).size(), 1u);
+}
+
+// Two rooms joined by a door in a wall; whether the robot gets through
+// depends on the door's width against its radius.
+std::vector<std::string> twoRoomsWithADoor(int door_cells) {
+  std::vector<std::string> rows;
+  const int height = 20;
+  for (int r = 0; r < height; ++r) {
+    std::string row(41, '.');
+    row[0] = row[40] = '#';
+    if (r == 0 || r == height - 1) row = std::string(41, '#');
+    const int door_from = height / 2 - door_cells / 2;
+    if (r > 0 && r < height - 1 && (r < door_from || r >= door_from + door_cells)) row[20] = '#';
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST(Planner, PassesADoorWiderThanTheRobotAndNotANarrowerOne) {
+  ExplorationOptions options;
+  options.robot_radius = 0.25;
+  const Vector2 left(0.85, 1.05), right(3.35, 1.05);  // cell centres, 25 cells apart
+  {
+    const ExplorationGrid grid(drawn(twoRoomsWithADoor(8)), options);  // 0.8 m
+    const Reach reach = reachFrom(grid, left);
+    const int goal = grid.cellAt(right);
+    ASSERT_TRUE(reach.reachable(goal));
+    const std::vector<Vector2> path = pathTo(grid, reach, goal);
+    ASSERT_GE(path.size(), 2u);
+    EXPECT_LT((path.front() - left).norm(), 1e-9);
+    EXPECT_LT((path.back() - right).norm(), 1e-9);
+    // Through the door, and no step longer than a diagonal cell.
+    bool through_door = false;
+    for (size_t i = 0; i < path.size(); ++i) {
+      if (std::abs(path[i].x() - 2.05) < 0.06) through_door = std::abs(path[i].y() - 1.0) < 0.4;
+      if (i > 0) {
+        EXPECT_LE((path[i] - path[i - 1]).norm(), 0.1 * std::sqrt(2.0) + 1e-9);
+      }
+    }
+    EXPECT_TRUE(through_door);
+    EXPECT_NEAR(reach.distance[goal], 2.5, 1e-9);  // straight through the door's middle
+  }
+  {
+    const ExplorationGrid grid(drawn(twoRoomsWithADoor(4)), options);  // 0.4 m
+    const Reach reach = reachFrom(grid, left);
+    EXPECT_FALSE(reach.reachable(grid.cellAt(right)));
+    EXPECT_TRUE(pathTo(grid, reach, grid.cellAt(right)).empty());
+  }
+}
+
+TEST(Planner, AStartBesideAWallStillGetsOutAndAStartInTheUnknownReachesNothing) {
+  ExplorationOptions options;
+  options.robot_radius = 0.25;
+  const ExplorationGrid grid(drawn(twoRoomsWithADoor(8)), options);
+  const Reach near_wall = reachFrom(grid, Vector2(0.15, 1.0));  // 0.05 m from the wall
+  EXPECT_TRUE(near_wall.reachable(grid.cellAt(Vector2(1.0, 1.0))));
+  const GridMapFile blank = drawn({"????", "????"});
+  const ExplorationGrid unknown(blank, options);
+  const Reach none = reachFrom(unknown, Vector2(0.15, 0.15));
+  for (int c = 0; c < unknown.cellCount(); ++c) EXPECT_FALSE(none.reachable(c));
+  EXPECT_TRUE(findFrontiers(unknown, none, options).empty());
+}
+
+// Two frontiers: one in the robot's own room, farther; one through the
+// door, nearer. With rooms known the robot finishes its own room first.
+TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
+  std::vector<std::string> rows = twoRoomsWithADoor(8);
+  // Unknown beyond the far end of the left room's top wall (its left part)
+  // and beyond the right room's top wall near the door.
+  for (int x = 1; x < 8; ++x) rows[0][x] = '?';
+  for (int x = 21; x < 28; ++x) rows[0][x] = '?';
+  ExplorationOptions options;
+  options.robot_radius = 0.15;
+  const ExplorationGrid grid(drawn(rows), options);
+  const Vector2 robot(1.9, 0.5);  // left room, near the door
+  const Reach reach = reachFrom(grid, robot);
+  const std::vector<Frontier> frontiers = findFrontiers(grid, reach, options);
+  ASSERT_EQ(frontiers.size(), 2u);
+  const RoomOf room_of = [](const Vector2& p) { return p.x() < 2.0 ? 0 : 1; };
+  const std::optional<size_t> without_rooms =
+      chooseFrontier(frontiers, grid, robot, nullptr, options);
+  const std::optional<size_t> with_rooms = chooseFrontier(frontiers, grid, robot, room_of, options);
+  ASSERT_TRUE(without_rooms && with_rooms);
+  EXPECT_GT(frontiers[*without_rooms].centroid.x(), 2.0) << "the nearer one, through the door";
+  EXPECT_LT(frontiers[*with_rooms].centroid.x(), 2.0) << "the robot's own room first";
+}
+
+}  // namespace
+}  // namespace ekf_slam
