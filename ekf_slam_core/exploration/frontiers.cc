@@ -24,12 +24,15 @@ ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptio
       resolution_(grid.resolution),
       origin_(grid.origin_x, grid.origin_y),
       free_max_(options.free_max),
+      robot_radius_(options.robot_radius),
       cells_(grid.cells),
-      traversable_(grid.cells.size(), false) {
+      traversable_(grid.cells.size(), false),
+      weight_(grid.cells.size(), 1.0) {
   if (static_cast<long>(cells_.size()) != static_cast<long>(width_) * height_) {
     width_ = height_ = 0;
     cells_.clear();
     traversable_.clear();
+    weight_.clear();
     return;
   }
   for (int c = 0; c < cellCount(); ++c) traversable_[c] = free(c);
@@ -49,6 +52,39 @@ ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptio
       }
     }
   }
+  // Clearance up to wall_clearance: Dijkstra outwards from every known,
+  // non-free cell (8-connected steps, within 8 % of the Euclidean distance).
+  if (options.wall_clearance <= 0.0 || options.wall_penalty <= 0.0) return;
+  const double limit = options.wall_clearance / resolution_;
+  std::vector<double> clearance(cells_.size(), kInfinity);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  for (int c = 0; c < cellCount(); ++c) {
+    if (!unknown(c) && !free(c)) {
+      clearance[c] = 0.0;
+      open.push({0.0, c});
+    }
+  }
+  while (!open.empty()) {
+    const auto [d, c] = open.top();
+    open.pop();
+    if (d > clearance[c]) continue;
+    const int x = c % width_, y = c / width_;
+    for (int k = 0; k < 8; ++k) {
+      const int nx = x + kDx[k], ny = y + kDy[k];
+      if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) continue;
+      const int n = ny * width_ + nx;
+      const double next = d + (k < 4 ? 1.0 : std::sqrt(2.0));
+      if (next < clearance[n] && next < limit) {
+        clearance[n] = next;
+        open.push({next, n});
+      }
+    }
+  }
+  for (int c = 0; c < cellCount(); ++c) {
+    if (clearance[c] < limit)
+      weight_[c] = 1.0 + options.wall_penalty * (1.0 - clearance[c] / limit);
+  }
 }
 
 int ExplorationGrid::cellAt(const Vector2& p) const {
@@ -63,6 +99,23 @@ int ExplorationGrid::cellAt(const Vector2& p) const {
 
 Vector2 ExplorationGrid::centre(int cell) const {
   return origin_ + resolution_ * Vector2(cell % width_ + 0.5, cell / width_ + 0.5);
+}
+
+void clearFootprint(GridMapFile* grid, const Vector2& p, double radius) {
+  if (grid->resolution <= 0.0 || grid->cells.size() != size_t(grid->width) * grid->height) return;
+  const double cx = (p.x() - grid->origin_x) / grid->resolution;
+  const double cy = (p.y() - grid->origin_y) / grid->resolution;
+  const double r = radius / grid->resolution;
+  if (!std::isfinite(cx) || !std::isfinite(cy)) return;
+  for (int y = std::max(0, int(std::floor(cy - r))); y <= std::min(grid->height - 1, int(cy + r));
+       ++y) {
+    for (int x = std::max(0, int(std::floor(cx - r))); x <= std::min(grid->width - 1, int(cx + r));
+         ++x) {
+      const double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
+      int8_t& cell = grid->cells[size_t(y) * grid->width + x];
+      if (dx * dx + dy * dy <= r * r && cell < 0) cell = 0;
+    }
+  }
 }
 
 bool Reach::reachable(int cell) const {
@@ -97,7 +150,7 @@ Reach reachFrom(const ExplorationGrid& grid, const Vector2& start) {
       if (!open_to(n)) continue;
       // No corner cutting: a diagonal step needs both sides open.
       if (k >= 4 && (!open_to(y * w + nx) || !open_to(ny * w + x))) continue;
-      const double step = k < 4 ? 1.0 : std::sqrt(2.0);
+      const double step = (k < 4 ? 1.0 : std::sqrt(2.0)) * grid.stepWeight(n);
       if (d + step < out.distance[n]) {
         out.distance[n] = d + step;
         out.previous[n] = c;
@@ -119,6 +172,56 @@ std::vector<Vector2> pathTo(const ExplorationGrid& grid, const Reach& reach, int
   return path;
 }
 
+std::vector<Vector2> simplifyPath(const std::vector<Vector2>& path, double tolerance) {
+  if (path.size() <= 2) return path;
+  std::vector<bool> keep(path.size(), false);
+  keep.front() = keep.back() = true;
+  // Split at the point farthest from the chord while it is beyond tolerance.
+  std::vector<std::pair<size_t, size_t>> spans = {{0, path.size() - 1}};
+  while (!spans.empty()) {
+    const auto [first, last] = spans.back();
+    spans.pop_back();
+    const Vector2 a = path[first], ab = path[last] - a;
+    const double length2 = ab.squaredNorm();
+    double farthest = -1.0;
+    size_t at = first;
+    for (size_t i = first + 1; i < last; ++i) {
+      const double t = length2 > 0.0 ? std::clamp((path[i] - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+      const double d = (path[i] - (a + t * ab)).norm();
+      if (d > farthest) {
+        farthest = d;
+        at = i;
+      }
+    }
+    if (farthest > tolerance) {
+      keep[at] = true;
+      spans.push_back({first, at});
+      spans.push_back({at, last});
+    }
+  }
+  std::vector<Vector2> out;
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (keep[i]) out.push_back(path[i]);
+  }
+  return out;
+}
+
+bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path) {
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    // Sample each segment at half a cell.
+    const double length = (path[i + 1] - path[i]).norm();
+    const int steps = std::max(1, static_cast<int>(std::ceil(length / (0.5 * grid.resolution()))));
+    for (int k = 0; k <= steps; ++k) {
+      const Vector2 p = path[i] + (path[i + 1] - path[i]) * (double(k) / steps);
+      const int cell = grid.cellAt(p);
+      if (cell < 0 || !grid.free(cell)) return false;
+      // The robot may stand inside the inflation (beside a wall) at the start.
+      if (!grid.traversable(cell) && (p - path.front()).norm() > grid.robotRadius()) return false;
+    }
+  }
+  return true;
+}
+
 std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& reach,
                                     const ExplorationOptions& options) {
   const int w = grid.width(), h = grid.height();
@@ -131,48 +234,88 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
     }
     return false;
   };
+  // Steps (cells) from `from` to every cell of the group, through the group.
+  auto stepsWithin = [&](const std::vector<int>& group, int from) {
+    std::vector<std::pair<int, int>> steps;  // (cell, steps)
+    std::vector<int> queue = {from};
+    std::vector<int> depth = {0};
+    std::vector<bool> in_group(grid.cellCount(), false), done(grid.cellCount(), false);
+    for (int c : group) in_group[c] = true;
+    done[from] = true;
+    for (size_t i = 0; i < queue.size(); ++i) {
+      steps.push_back({queue[i], depth[i]});
+      const int x = queue[i] % w, y = queue[i] / w;
+      for (int k = 0; k < 8; ++k) {
+        const int nx = x + kDx[k], ny = y + kDy[k];
+        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+        const int n = ny * w + nx;
+        if (in_group[n] && !done[n]) {
+          done[n] = true;
+          queue.push_back(n);
+          depth.push_back(depth[i] + 1);
+        }
+      }
+    }
+    return steps;
+  };
+  const int piece_cells =
+      std::max(1, static_cast<int>(std::round(options.max_frontier_length / grid.resolution())));
   std::vector<Frontier> out;
   std::vector<bool> seen(grid.cellCount(), false);
   for (int c = 0; c < grid.cellCount(); ++c) {
     if (seen[c] || !isFrontier(c)) continue;
-    Frontier f;
-    f.distance = kInfinity;
-    std::vector<int> stack = {c};
+    std::vector<int> group = {c};
     seen[c] = true;
-    while (!stack.empty()) {
-      const int cell = stack.back();
-      stack.pop_back();
-      f.cells.push_back(cell);
-      const int x = cell % w, y = cell / w;
+    for (size_t i = 0; i < group.size(); ++i) {
+      const int x = group[i] % w, y = group[i] / w;
       for (int k = 0; k < 8; ++k) {
         const int nx = x + kDx[k], ny = y + kDy[k];
         if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
         const int n = ny * w + nx;
         if (!seen[n] && isFrontier(n)) {
           seen[n] = true;
-          stack.push_back(n);
+          group.push_back(n);
         }
       }
     }
-    f.length = static_cast<double>(f.cells.size()) * grid.resolution();
-    if (f.length < options.min_frontier_length) continue;
-    for (int cell : f.cells) {
-      f.centroid += grid.centre(cell);
-      // The frontier cell itself may lie inside the inflation; its
-      // traversable neighbour is where the robot can stand to look on.
-      const int x = cell % w, y = cell / w;
-      for (int k = -1; k < 8; ++k) {
-        const int nx = k < 0 ? x : x + kDx[k], ny = k < 0 ? y : y + kDy[k];
-        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-        const int n = ny * w + nx;
-        if (reach.reachable(n) && reach.distance[n] < f.distance) {
-          f.distance = reach.distance[n];
-          f.goal = n;
+    if (static_cast<double>(group.size()) * grid.resolution() < options.min_frontier_length) {
+      continue;
+    }
+    // Pieces along the group: steps from one of its ends (the cell farthest
+    // from any cell is one), max_frontier_length of steps each.
+    std::vector<std::pair<int, int>> steps = stepsWithin(group, group.front());
+    steps = stepsWithin(group, steps.back().first);
+    const int pieces = steps.back().second / piece_cells + 1;
+    std::vector<Frontier> parts(pieces);
+    for (const auto& [cell, step] : steps) parts[step / piece_cells].cells.push_back(cell);
+    for (Frontier& f : parts) {
+      f.length = static_cast<double>(f.cells.size()) * grid.resolution();
+      // A short tail piece stays only when the whole group is that short.
+      if (f.cells.empty() || (pieces > 1 && f.length < options.min_frontier_length)) continue;
+      for (int cell : f.cells) f.centroid += grid.centre(cell);
+      f.centroid /= static_cast<double>(f.cells.size());
+      // The goal: the reachable cell, among the piece's cells and their
+      // neighbours (a frontier cell may lie inside the inflation), nearest
+      // its centroid.
+      double best = kInfinity;
+      f.distance = kInfinity;
+      for (int cell : f.cells) {
+        const int x = cell % w, y = cell / w;
+        for (int k = -1; k < 8; ++k) {
+          const int nx = k < 0 ? x : x + kDx[k], ny = k < 0 ? y : y + kDy[k];
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          const int n = ny * w + nx;
+          if (!reach.reachable(n)) continue;
+          const double d = (grid.centre(n) - f.centroid).squaredNorm();
+          if (d < best || (d == best && reach.distance[n] < f.distance)) {
+            best = d;
+            f.goal = n;
+            f.distance = reach.distance[n];
+          }
         }
       }
+      out.push_back(std::move(f));
     }
-    f.centroid /= static_cast<double>(f.cells.size());
-    out.push_back(std::move(f));
   }
   std::sort(out.begin(), out.end(),
             [](const Frontier& a, const Frontier& b) { return a.cells.size() > b.cells.size(); });
@@ -198,6 +341,103 @@ std::optional<size_t> chooseFrontier(const std::vector<Frontier>& frontiers,
     }
   }
   return best;
+}
+
+std::vector<int> segmentRooms(const ExplorationGrid& grid, double door_width) {
+  const int w = grid.width(), h = grid.height(), n = grid.cellCount();
+  std::vector<int> label(n, -1);
+  if (door_width <= 0.0) return label;
+  // Clearance (cells) from every cell that is not free, up to the core's.
+  const double core = 0.5 * door_width / grid.resolution();
+  std::vector<double> clearance(n, kInfinity);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  for (int c = 0; c < n; ++c) {
+    if (!grid.free(c)) {
+      clearance[c] = 0.0;
+      open.push({0.0, c});
+    }
+  }
+  while (!open.empty()) {
+    const auto [d, c] = open.top();
+    open.pop();
+    if (d > clearance[c]) continue;
+    const int x = c % w, y = c / w;
+    for (int k = 0; k < 8; ++k) {
+      const int nx = x + kDx[k], ny = y + kDy[k];
+      if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+      const int m = ny * w + nx;
+      const double next = d + (k < 4 ? 1.0 : std::sqrt(2.0));
+      if (next < clearance[m] && next <= core + 1.0) {
+        clearance[m] = next;
+        open.push({next, m});
+      }
+    }
+  }
+  // The cores, numbered by connected component (8-neighbours).
+  int rooms = 0;
+  std::vector<int> frontier_cells;
+  for (int c = 0; c < n; ++c) {
+    if (label[c] >= 0 || clearance[c] <= core) continue;
+    std::vector<int> stack = {c};
+    label[c] = rooms;
+    while (!stack.empty()) {
+      const int cell = stack.back();
+      stack.pop_back();
+      frontier_cells.push_back(cell);
+      const int x = cell % w, y = cell / w;
+      for (int k = 0; k < 8; ++k) {
+        const int nx = x + kDx[k], ny = y + kDy[k];
+        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+        const int m = ny * w + nx;
+        if (label[m] < 0 && clearance[m] > core) {
+          label[m] = rooms;
+          stack.push_back(m);
+        }
+      }
+    }
+    ++rooms;
+  }
+  // The rest of the free space: breadth first from all cores at once.
+  std::queue<int> grow;
+  for (int c : frontier_cells) grow.push(c);
+  while (!grow.empty()) {
+    const int cell = grow.front();
+    grow.pop();
+    const int x = cell % w, y = cell / w;
+    for (int k = 0; k < 4; ++k) {
+      const int nx = x + kDx[k], ny = y + kDy[k];
+      if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+      const int m = ny * w + nx;
+      if (label[m] < 0 && grid.free(m)) {
+        label[m] = label[cell];
+        grow.push(m);
+      }
+    }
+  }
+  return label;
+}
+
+ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
+                                const RoomOf& room_of, const Excluded& excluded,
+                                const ExplorationOptions& options) {
+  ExplorationPlan plan;
+  plan.reach = reachFrom(grid, robot);
+  plan.frontiers = findFrontiers(grid, plan.reach, options);
+  if (excluded) {
+    for (Frontier& f : plan.frontiers) {
+      if (f.goal >= 0 && excluded(grid.centre(f.goal))) {
+        f.goal = -1;
+        f.distance = kInfinity;
+      }
+    }
+  }
+  plan.chosen = chooseFrontier(plan.frontiers, grid, robot, room_of, options);
+  if (plan.chosen) {
+    plan.path = simplifyPath(pathTo(grid, plan.reach, plan.frontiers[*plan.chosen].goal),
+                             grid.resolution());
+  }
+  return plan;
 }
 
 }  // namespace ekf_slam

@@ -8,10 +8,16 @@
 //   grid inflated by the robot. Unknown cells are not traversable.
 // - reachFrom() runs Dijkstra over the traversable cells (8-connected, steps
 //   of 1 or √2 cells) from the robot's cell: every reachable cell's path
-//   length and its predecessor.
+//   cost and its predecessor. A step costs its length, lengthened near
+//   obstacles: by wall_penalty × (wall_clearance − clearance) / wall_clearance
+//   of it where the cell's clearance (distance to the nearest non-free known
+//   cell) is below wall_clearance, so paths keep to the middle of a
+//   corridor or a door rather than grazing the inflation's edge.
 // - A frontier is a connected group (8-neighbours) of free cells that touch
-//   an unknown cell (4-neighbours), at least `min_frontier_length` long;
-//   its goal is its reachable cell nearest the robot along the grid.
+//   an unknown cell (4-neighbours), at least `min_frontier_length` long, cut
+//   into pieces of at most `max_frontier_length` along its length (a room's
+//   whole unseen edge is many places to look from, not one); its goal is
+//   the reachable cell among and beside its cells nearest its centroid.
 // - chooseFrontier() prefers finishing the robot's current room (a room
 //   label per position, e.g. from the walls and doorways of
 //   mecp/room_gating.h), then the lowest cost: path length minus
@@ -33,16 +39,24 @@ namespace ekf_slam {
 
 struct ExplorationOptions {
   int free_max = 25;                 // occupancy value up to which a cell is free (0..100)
-  double robot_radius = 0.3;         // m: cells nearer a non-free known cell are not traversable
+  double robot_radius = 0.35;        // m: cells nearer a non-free known cell are not traversable
+  double wall_clearance = 0.8;       // m: cells nearer an obstacle than this cost more to cross
+  double wall_penalty = 3.0;         // extra cost of a step at the inflation's edge (× its length)
   double min_frontier_length = 0.5;  // m of frontier (cells times resolution)
+  double max_frontier_length = 2.0;  // m: longer frontiers are cut into pieces this long
   double gain_weight = 1.0;          // m of path a metre of frontier is worth
+  double door_width = 1.2;  // m: free space splits into rooms at passages this narrow; 0: no rooms
 
   template <class Visitor>
   void visitFields(Visitor& v) {
     v.integer("free_max", free_max, Bounds::closed(0, 99, ""));
     v.number("robot_radius", robot_radius, Bounds::closed(0.0, 5.0, "m"));
+    v.number("wall_clearance", wall_clearance, Bounds::closed(0.0, 10.0, "m"));
+    v.number("wall_penalty", wall_penalty, Bounds::closed(0.0, 100.0, ""));
     v.number("min_frontier_length", min_frontier_length, Bounds::closed(0.0, 100.0, "m"));
+    v.number("max_frontier_length", max_frontier_length, Bounds::closed(0.1, 1000.0, "m"));
     v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));
+    v.number("door_width", door_width, Bounds::closed(0.0, 10.0, "m"));
   }
 };
 
@@ -57,6 +71,7 @@ class ExplorationGrid {
   int height() const { return height_; }
   int cellCount() const { return width_ * height_; }
   double resolution() const { return resolution_; }
+  double robotRadius() const { return robot_radius_; }
   // The cell holding `p` (map frame), or -1 outside the grid.
   int cellAt(const Vector2& p) const;
   Vector2 centre(int cell) const;
@@ -64,19 +79,27 @@ class ExplorationGrid {
   bool unknown(int cell) const { return cells_[cell] < 0; }
   bool free(int cell) const { return cells_[cell] >= 0 && cells_[cell] <= free_max_; }
   bool traversable(int cell) const { return traversable_[cell]; }
+  // The cost of one metre through `cell` (1 away from obstacles).
+  double stepWeight(int cell) const { return weight_[cell]; }
 
  private:
   int width_ = 0, height_ = 0;
   double resolution_ = 0.05;
   Vector2 origin_ = Vector2::Zero();
   int free_max_ = 25;
+  double robot_radius_ = 0.0;
   std::vector<int8_t> cells_;
   std::vector<bool> traversable_;
+  std::vector<double> weight_;
 };
 
-// The robot's reach: per cell the path length from the start (m; +inf
-// where unreachable) and the previous cell on that path (-1 at the start
-// and where unreachable).
+// Marks the unknown cells within `radius` of `p` free: the floor under the
+// robot, which its laser does not see.
+void clearFootprint(GridMapFile* grid, const Vector2& p, double radius);
+
+// The robot's reach: per cell the path cost from the start (m of path,
+// lengthened near obstacles by stepWeight; +inf where unreachable) and the previous cell on that
+// path (-1 at the start and where unreachable).
 struct Reach {
   int start = -1;
   std::vector<double> distance;
@@ -100,16 +123,36 @@ struct Frontier {
   std::vector<int> cells;
   Vector2 centroid = Vector2::Zero();  // map frame
   double length = 0.0;                 // m (cells times resolution)
-  int goal = -1;                       // its reachable cell nearest along the grid; -1: none
+  int goal = -1;                       // its reachable cell nearest its centroid; -1: none
   double distance = 0.0;               // m of path to `goal`; +inf without one
 };
 
-// Every frontier at least options.min_frontier_length long, largest first.
+// Every frontier (piece) at least options.min_frontier_length long,
+// largest first.
 std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& reach,
                                     const ExplorationOptions& options);
 
+// The path with the points it does not need left out: every point dropped
+// lies within `tolerance` (m) of the straight segment that replaces it
+// (Douglas–Peucker). The first and last points are kept.
+std::vector<Vector2> simplifyPath(const std::vector<Vector2>& path, double tolerance);
+
+// Whether the path still holds on this grid (one planned on an older grid
+// may not): every cell it crosses is free, and traversable beyond the robot's
+// radius from its first point (the robot may start beside a wall).
+bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path);
+
 // The room of a position (map frame), or -1 where none is known.
 using RoomOf = std::function<int(const Vector2&)>;
+
+// Rooms on the grid, the thesis's rooms and doorways (§4.4) found in the
+// free space rather than in line features: the cells farther than
+// door_width / 2 from every cell that is not free (walls, and the unknown)
+// fall apart at each doorway into connected cores, one a room (a corridor
+// is one too); every other free cell joins the core nearest it through
+// free space. One label per cell (0, 1, …), -1 where not free or cut off.
+// Labels are numbered afresh on each grid: compare them within one grid.
+std::vector<int> segmentRooms(const ExplorationGrid& grid, double door_width);
 
 // The frontier to go to next, as an index into `frontiers`: among the
 // reachable ones, those in the robot's room (room_of at `robot`) first,
@@ -118,5 +161,23 @@ using RoomOf = std::function<int(const Vector2&)>;
 std::optional<size_t> chooseFrontier(const std::vector<Frontier>& frontiers,
                                      const ExplorationGrid& grid, const Vector2& robot,
                                      const RoomOf& room_of, const ExplorationOptions& options);
+
+// Whether a frontier goal (map frame) is to be passed over: the explorer
+// gave up on one there.
+using Excluded = std::function<bool(const Vector2&)>;
+
+// One planning round from the robot's position: its reach, the frontiers
+// (those whose goal `excluded` names keep no goal), the one chosen and the
+// path to its goal (simplified to within a cell). No choice when no
+// frontier is reachable.
+struct ExplorationPlan {
+  Reach reach;
+  std::vector<Frontier> frontiers;
+  std::optional<size_t> chosen;
+  std::vector<Vector2> path;
+};
+ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
+                                const RoomOf& room_of, const Excluded& excluded,
+                                const ExplorationOptions& options);
 
 }  // namespace ekf_slam

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -77,6 +78,7 @@ std::vector<std::string> twoRoomsWithADoor(int door_cells) {
 TEST(Planner, PassesADoorWiderThanTheRobotAndNotANarrowerOne) {
   ExplorationOptions options;
   options.robot_radius = 0.25;
+  options.wall_penalty = 0.0;                         // path lengths in plain metres
   const Vector2 left(0.85, 1.05), right(3.35, 1.05);  // cell centres, 25 cells apart
   {
     const ExplorationGrid grid(drawn(twoRoomsWithADoor(8)), options);  // 0.8 m
@@ -129,6 +131,7 @@ TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   for (int x = 21; x < 28; ++x) rows[0][x] = '?';
   ExplorationOptions options;
   options.robot_radius = 0.15;
+  options.wall_penalty = 0.0;  // plain path lengths: the door's frontier is the nearer
   const ExplorationGrid grid(drawn(rows), options);
   const Vector2 robot(1.9, 0.5);  // left room, near the door
   const Reach reach = reachFrom(grid, robot);
@@ -141,6 +144,116 @@ TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   ASSERT_TRUE(without_rooms && with_rooms);
   EXPECT_GT(frontiers[*without_rooms].centroid.x(), 2.0) << "the nearer one, through the door";
   EXPECT_LT(frontiers[*with_rooms].centroid.x(), 2.0) << "the robot's own room first";
+}
+
+// A corridor 1.4 m wide (y from 0.1 to 1.5 m) and 4 m long.
+std::vector<std::string> corridor() {
+  std::vector<std::string> rows;
+  rows.push_back(std::string(42, '#'));
+  for (int r = 0; r < 14; ++r) rows.push_back("#" + std::string(40, '.') + "#");
+  rows.push_back(std::string(42, '#'));
+  return rows;
+}
+
+TEST(Planner, ACostNearTheWallsKeepsThePathToTheCorridorsMiddle) {
+  ExplorationOptions options;
+  options.robot_radius = 0.25;
+  // Start and goal both 0.35 m from the bottom wall's face.
+  const Vector2 start(0.45, 0.45), goal(3.65, 0.45);
+  auto farthestFromTheWall = [&](const ExplorationOptions& o) {
+    const ExplorationGrid grid(drawn(corridor()), o);
+    const Reach reach = reachFrom(grid, start);
+    const std::vector<Vector2> path = pathTo(grid, reach, grid.cellAt(goal));
+    EXPECT_FALSE(path.empty());
+    double highest = 0.0;
+    for (const Vector2& p : path) highest = std::max(highest, p.y());
+    return highest;
+  };
+  options.wall_penalty = 0.0;
+  EXPECT_LT(farthestFromTheWall(options), 0.5) << "the shortest path hugs the wall";
+  options.wall_penalty = 3.0;
+  options.wall_clearance = 0.8;
+  EXPECT_NEAR(farthestFromTheWall(options), 0.8, 0.06) << "the middle, 0.7 m from either face";
+}
+
+TEST(Planner, ASimplifiedPathKeepsItsCornersAndDropsTheStraightRuns) {
+  std::vector<Vector2> path;
+  for (int i = 0; i <= 10; ++i) path.emplace_back(0.1 * i, 0.0);
+  for (int i = 1; i <= 10; ++i) path.emplace_back(1.0, 0.1 * i);
+  const std::vector<Vector2> simple = simplifyPath(path, 0.05);
+  ASSERT_EQ(simple.size(), 3u);
+  EXPECT_LT((simple[1] - Vector2(1.0, 0.0)).norm(), 1e-9);
+  EXPECT_LT((simple[2] - Vector2(1.0, 1.0)).norm(), 1e-9);
+  // A staircase of cell steps within the tolerance becomes one segment.
+  std::vector<Vector2> stairs;
+  for (int i = 0; i <= 20; ++i) stairs.emplace_back(0.05 * i, 0.05 * (i / 2));
+  EXPECT_EQ(simplifyPath(stairs, 0.05).size(), 2u);
+  EXPECT_EQ(simplifyPath({Vector2(0, 0)}, 0.05).size(), 1u);
+}
+
+TEST(Planner, APathAcrossANewWallIsNoLongerClear) {
+  ExplorationOptions options;
+  options.robot_radius = 0.25;
+  std::vector<std::string> rows = corridor();
+  const ExplorationGrid open(drawn(rows), options);
+  const Vector2 start(0.15, 0.8), goal(3.65, 0.8);  // the start beside the left wall
+  const std::vector<Vector2> path =
+      simplifyPath(pathTo(open, reachFrom(open, start), open.cellAt(goal)), open.resolution());
+  ASSERT_GE(path.size(), 2u);
+  EXPECT_TRUE(pathClear(open, path)) << "the start inside the inflation does not count";
+  for (size_t r = 1; r + 1 < rows.size(); ++r) rows[r][20] = '#';  // a wall across it
+  const ExplorationGrid closed(drawn(rows), options);
+  EXPECT_FALSE(pathClear(closed, path));
+  EXPECT_FALSE(reachFrom(closed, start).reachable(closed.cellAt(goal)));
+}
+
+TEST(Frontiers, AGoalGivenUpIsPassedOver) {
+  std::vector<std::string> rows = twoRoomsWithADoor(8);
+  for (int x = 1; x < 8; ++x) rows[0][x] = '?';
+  for (int x = 21; x < 28; ++x) rows[0][x] = '?';
+  ExplorationOptions options;
+  options.robot_radius = 0.15;
+  const ExplorationGrid grid(drawn(rows), options);
+  const Vector2 robot(1.9, 0.5);
+  const ExplorationPlan first = planExploration(grid, robot, nullptr, nullptr, options);
+  ASSERT_TRUE(first.chosen);
+  const Vector2 given_up = grid.centre(first.frontiers[*first.chosen].goal);
+  ASSERT_GE(first.path.size(), 2u);
+  EXPECT_LT((first.path.back() - given_up).norm(), 1e-9);
+  const Excluded excluded = [&](const Vector2& p) { return (p - given_up).norm() < 0.5; };
+  const ExplorationPlan second = planExploration(grid, robot, nullptr, excluded, options);
+  ASSERT_TRUE(second.chosen);
+  EXPECT_GT((grid.centre(second.frontiers[*second.chosen].goal) - given_up).norm(), 0.5);
+  const ExplorationPlan none = planExploration(
+      grid, robot, nullptr, [](const Vector2&) { return true; }, options);
+  EXPECT_FALSE(none.chosen);
+  EXPECT_TRUE(none.path.empty());
+  EXPECT_EQ(none.frontiers.size(), 2u) << "the frontiers are still reported";
+}
+
+TEST(Rooms, ADoorSplitsTheFreeSpaceAndAWideOpeningDoesNot) {
+  ExplorationOptions options;
+  {
+    const ExplorationGrid grid(drawn(twoRoomsWithADoor(8)), options);  // a 0.8 m door
+    const std::vector<int> rooms = segmentRooms(grid, 1.2);
+    const int left = rooms[grid.cellAt(Vector2(1.0, 1.0))];
+    const int right = rooms[grid.cellAt(Vector2(3.0, 1.0))];
+    EXPECT_GE(left, 0);
+    EXPECT_GE(right, 0);
+    EXPECT_NE(left, right);
+    // Corners and wall-side cells join their own room, walls none.
+    EXPECT_EQ(rooms[grid.cellAt(Vector2(0.15, 0.15))], left);
+    EXPECT_EQ(rooms[grid.cellAt(Vector2(1.95, 1.85))], left);
+    EXPECT_EQ(rooms[grid.cellAt(Vector2(2.15, 0.15))], right);
+    EXPECT_EQ(rooms[grid.cellAt(Vector2(0.05, 1.0))], -1);
+    EXPECT_TRUE(segmentRooms(grid, 0.0) == std::vector<int>(grid.cellCount(), -1));
+  }
+  {
+    const ExplorationGrid grid(drawn(twoRoomsWithADoor(16)), options);  // 1.6 m: one room
+    const std::vector<int> rooms = segmentRooms(grid, 1.2);
+    EXPECT_EQ(rooms[grid.cellAt(Vector2(1.0, 1.0))], rooms[grid.cellAt(Vector2(3.0, 1.0))]);
+    EXPECT_GE(rooms[grid.cellAt(Vector2(1.0, 1.0))], 0);
+  }
 }
 
 }  // namespace
