@@ -27,16 +27,7 @@ import rospy
 import tf2_ros
 from std_srvs.srv import SetBool
 
-
-def static_transforms(path):
-    """Every transform on /tf_static of the bag at `path`, one per child frame
-    (the last written), in the order the child frames first appear."""
-    by_child = {}
-    with rosbag.Bag(path) as bag:
-        for _topic, message, _stamp in bag.read_messages(topics=["/tf_static"]):
-            for transform in message.transforms:
-                by_child[transform.child_frame_id] = transform
-    return list(by_child.values())
+from ekf_slam_tools.static_tf import static_transforms
 
 
 def resume(service):
