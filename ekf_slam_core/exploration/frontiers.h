@@ -39,7 +39,7 @@ namespace ekf_slam {
 
 struct ExplorationOptions {
   int free_max = 25;                 // occupancy value up to which a cell is free (0..100)
-  double robot_radius = 0.35;        // m: cells nearer a non-free known cell are not traversable
+  double robot_radius = 0.4;         // m: cells nearer a non-free known cell are not traversable
   double wall_clearance = 0.8;       // m: cells nearer an obstacle than this cost more to cross
   double wall_penalty = 3.0;         // extra cost of a step at the inflation's edge (× its length)
   double min_frontier_length = 0.5;  // m of frontier (cells times resolution)

@@ -123,6 +123,30 @@ TEST(Planner, AStartBesideAWallStillGetsOutAndAStartInTheUnknownReachesNothing) 
 
 // Two frontiers: one in the robot's own room, farther; one through the
 // door, nearer. With rooms known the robot finishes its own room first.
+// The laser does not see the floor under the robot: its footprint is
+// marked free where unknown, and walls stay walls.
+TEST(Planner, TheFootprintUnderTheRobotIsFreeWhereTheMapDoesNotKnowIt) {
+  GridMapFile grid = drawn({"??????????", "??????????", "????##????", "??????????", "??????????"});
+  clearFootprint(&grid, Vector2(0.5, 0.25), 0.2);
+  int free = 0;
+  for (int c = 0; c < grid.width * grid.height; ++c) {
+    const Vector2 centre(0.1 * (c % grid.width) + 0.05, 0.1 * (c / grid.width) + 0.05);
+    const bool inside = (centre - Vector2(0.5, 0.25)).norm() <= 0.2;
+    if (grid.cells[c] == 100) {
+      EXPECT_EQ(c / grid.width, 2) << "the wall stays";
+      continue;
+    }
+    EXPECT_EQ(grid.cells[c], inside ? 0 : -1) << c;
+    free += grid.cells[c] == 0;
+  }
+  EXPECT_GT(free, 6);
+  ExplorationOptions options;
+  options.robot_radius = 0.0;
+  const ExplorationGrid explored(grid, options);
+  EXPECT_TRUE(
+      reachFrom(explored, Vector2(0.55, 0.15)).reachable(explored.cellAt(Vector2(0.35, 0.15))));
+}
+
 TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   std::vector<std::string> rows = twoRoomsWithADoor(8);
   // Unknown beyond the far end of the left room's top wall (its left part)

@@ -45,6 +45,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ekf_slam/SaveMap.h"
@@ -285,9 +286,10 @@ class Explorer {
     if (!pursuit_) return plan_now_ || map_changed_;
     if (recovery_.state() == waypoints::RecoveryState::kGaveUp) return true;
     if (pursuit_->done()) {
-      // At a frontier goal, the next plan waits for a map made since the
-      // arrival: the one it arrived with does not show what it sees there.
-      return phase_ != Phase::kExploring || (arrived_ && map_received_ > *arrived_);
+      // At a frontier goal the next plan waits for a map made since the
+      // arrival: the one it arrived with does not show what it sees there
+      // (going elsewhere meanwhile, it came back for the same frontiers).
+      return phase_ != Phase::kExploring || (reached_ && map_received_ > *reached_);
     }
     return (now - last_plan_).toSec() >= params_.replan_period && map_changed_;
   }
@@ -387,7 +389,7 @@ class Explorer {
                chosen.length, goal.x(), goal.y(), chosen.distance, plan.frontiers.size());
     }
     goal_ = goal;
-    follow(plan.path, now);
+    follow(plan.path, now, !same_goal);
   }
 
   void planHome(const ekf_slam::ExplorationGrid& grid, const Vector2& robot, const ros::Time& now) {
@@ -423,15 +425,20 @@ class Explorer {
         ekf_slam::pathClear(grid, path_)) {
       return;
     }
-    follow(ekf_slam::simplifyPath(path, grid.resolution()), now);
+    follow(ekf_slam::simplifyPath(path, grid.resolution()), now, !pursuit_);
   }
 
-  void follow(std::vector<Vector2> path, const ros::Time& now) {
+  // Drives `path` from now on. `new_goal`: the recovery starts afresh; a
+  // new path to the same goal keeps its count of back-offs, so a goal the
+  // robot cannot get to is given up however often the path is replanned.
+  void follow(std::vector<Vector2> path, const ros::Time& now, bool new_goal = true) {
     if (path.size() < 2) path.push_back(path.empty() ? last_pose_->translation() : path.back());
     path_ = path;
     pursuit_ = std::make_unique<waypoints::PurePursuit>(path, params_.pursuit);
-    recovery_ = waypoints::BlockageRecovery(params_.recovery);
-    arrived_.reset();
+    reached_.reset();
+    if (new_goal || recovery_.state() == waypoints::RecoveryState::kGaveUp) {
+      recovery_ = waypoints::BlockageRecovery(params_.recovery);
+    }
     last_update_ = now;
     anything_planned_ = true;
     nav_msgs::Path message;
@@ -452,7 +459,7 @@ class Explorer {
     const double dt = std::max(0.0, (now - last_update_).toSec());
     last_update_ = now;
     const waypoints::VelocityCommand wanted = pursuit_->update(pose, dt);
-    if (pursuit_->done() && !arrived_) arrived_ = now;
+    if (pursuit_->done() && !reached_) reached_ = now;
     const waypoints::RecoveryState before = recovery_.state();
     const waypoints::VelocityCommand command =
         recovery_.update(pose, now.toSec(), wanted, pursuit_->remaining());
@@ -682,7 +689,7 @@ class Explorer {
   std::string saved_;
   std::optional<Pose2> home_, last_pose_;
   std::optional<Vector2> goal_;
-  std::optional<ros::Time> arrived_;  // when the pursuit reached the path's end
+  std::optional<ros::Time> reached_;  // when the pursuit reached the end of its path
   std::vector<Vector2> path_;
   std::unique_ptr<waypoints::PurePursuit> pursuit_;
   waypoints::BlockageRecovery recovery_;
