@@ -8,6 +8,12 @@ the robot must never touch a wall (no stall from the P3-DX driver). The
 safety gate's stops, the time and the distance driven are printed, and with
 --out written to a YAML file.
 
+With --rooms (the rooms world, ekf_slam_tools.worlds.rooms_layout) the
+order in which the robot entered the rooms (ground truth, at least
+ROOM_DEPTH inside one) is printed, and no room may be entered twice: the
+robot finishes a room before it leaves it. The corridor is passed through
+as often as needed.
+
 Reachable free space: the world's free cells connected to the start cell
 through free cells (ground_truth/world, in the map frame). Covered: the
 cell of /map at the same place is known, free or occupied. Home: the last
@@ -30,10 +36,12 @@ from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import OccupancyGrid, Odometry
 from std_msgs.msg import Bool
 
+from ekf_slam_tools import worlds
 from ekf_slam_tools.se2 import compose, inverse, yaw_of
 
 COVERAGE = 0.95
 HOME = 0.5  # m
+ROOM_DEPTH = 0.4  # m inside a room's walls that counts as in it (not in its door)
 
 
 class Recorder:
@@ -125,12 +133,28 @@ def coverage(world, slam_map):
     return known / max(1, len(cells)), len(cells)
 
 
+def room_visits(truth, layout):
+    """The areas of `layout` (name: (x0, y0, x1, y1)) the path passes
+    through, in order, each stay once: a position counts in an area when it
+    lies ROOM_DEPTH inside it; between areas (doors) it counts in none."""
+    visits = []
+    for x, y, _ in truth:
+        for name, (x0, y0, x1, y1) in layout.items():
+            if x0 + ROOM_DEPTH < x < x1 - ROOM_DEPTH and y0 + ROOM_DEPTH < y < y1 - ROOM_DEPTH:
+                if not visits or visits[-1] != name:
+                    visits.append(name)
+                break
+    return visits
+
+
 class Explore(unittest.TestCase):
     def test_explores_and_returns(self):
         argv = [a for a in sys.argv[1:] if not a.startswith("__") and not a.startswith("--gtest")]
         parser = argparse.ArgumentParser()
         parser.add_argument("--timeout", type=float, default=1200.0)
         parser.add_argument("--out", default="")
+        parser.add_argument("--rooms", action="store_true",
+                            help="the rooms world: check the order of the rooms")
         args, _ = parser.parse_known_args(argv)
         rospy.init_node("explore_test")
         r = Recorder()
@@ -160,6 +184,9 @@ class Explore(unittest.TestCase):
             "explorer": r.explorer_message,
             "goals_given_up": r.explorer.get("goals given up", "?"),
         }
+        if args.rooms:
+            visits = room_visits(truth, worlds.rooms_layout())
+            result["rooms_entered"] = visits
         print("exploration: %s" % yaml.safe_dump(result, default_flow_style=True).strip())
         if args.out:
             os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
@@ -169,6 +196,13 @@ class Explore(unittest.TestCase):
         self.assertLess(home, HOME, "ended %.2f m from its start" % home)
         self.assertGreaterEqual(covered, COVERAGE, "the map covers %.1f %% of the reachable "
                                 "free space" % (100 * covered))
+        if args.rooms:
+            rooms = [v for v in visits if v != "corridor"]
+            twice = sorted({v for v in rooms if rooms.count(v) > 1})
+            self.assertFalse(twice, "rooms entered again after being left: %s (order %s)" %
+                             (twice, visits))
+            self.assertEqual(len(set(rooms)), len(worlds.rooms_layout()) - 1,
+                             "not every room entered: %s" % visits)
 
 
 if __name__ == "__main__":

@@ -43,7 +43,8 @@ TEST(FootprintTest, OutsideTheImageCountsAsAWall) {
 }
 
 TEST(FootprintTest, ShippedWorldsStartPosesAreFreeForTheRobot) {
-  for (const char* name : {"office", "office_turned", "carton_layout"}) {
+  for (const char* name :
+       {"office", "office_turned", "carton_layout", "rooms", "calibration_room"}) {
     GridWorld world;
     const std::string path = std::string(EKF_SLAM_SOURCE_DIR) + "/config/worlds/" + name + ".yaml";
     ASSERT_EQ(GridWorld::load(path, &world), "");

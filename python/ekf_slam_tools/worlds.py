@@ -14,6 +14,9 @@ Worlds:
                  docs/results.md, "The pose NEES").
   calibration_room  a room with a box corner ahead of the start, for the
                  laser-mount calibration tools (docs/bringup.md).
+  rooms          six rooms behind 1 m doors on either side of a corridor
+                 (16 m x 9 m), for exploration room by room (thesis §4.4;
+                 ROOMS gives their extents).
 Each YAML carries `start_pose: [x, y, yaw]`, a free pose for the robot
 (map_server ignores the extra key).
 """
@@ -95,6 +98,42 @@ def calibration_room():
     return segments, (8.5, 6.5), (-2.25, -3.25), (0.0, 0.0, 0.0)
 
 
+# The rooms world's corridor: y from 3.5 to 5.5 m, x from 0 to 16 m.
+ROOMS_CORRIDOR = (0.0, 3.5, 16.0, 5.5)
+
+
+def rooms_layout():
+    """Named extents (x0, y0, x1, y1) of the rooms world's rooms and its
+    corridor (world frame), inside the walls."""
+    out = {"corridor": ROOMS_CORRIDOR}
+    for i, (x0, x1) in enumerate(((0.0, 5.0), (5.0, 10.5), (10.5, 16.0))):
+        out["south %d" % (i + 1)] = (x0, 0.0, x1, 3.5)
+        out["north %d" % (i + 1)] = (x0, 5.5, x1, 9.0)
+    return out
+
+
+def rooms():
+    """Six rooms behind doors off a corridor: a 16 m x 9 m floor, the
+    corridor 2 m wide along its middle, three rooms 3.5 m deep on either
+    side, each with a 1 m door onto the corridor (north and south doors
+    staggered) and a piece of furniture square to the walls."""
+    segments = closed([(0, 0), (16, 0), (16, 9), (0, 9)])
+    doors = {"south": [(2.0, 3.0), (8.5, 9.5), (13.5, 14.5)],
+             "north": [(3.0, 4.0), (7.0, 8.0), (12.0, 13.0)]}
+    for y, side in ((3.5, "south"), (5.5, "north")):
+        x = 0.0
+        for a, b in doors[side]:
+            segments.append(((x, y), (a, y)))
+            x = b
+        segments.append(((x, y), (16.0, y)))
+    for x in (5.0, 10.5):  # the rooms' partitions
+        segments += [((x, 0), (x, 3.5)), ((x, 5.5), (x, 9))]
+    for x, y, w, h in [(1.0, 1.0, 1.0, 0.6), (7.5, 1.2, 0.8, 0.8), (14.5, 0.8, 1.2, 0.5),
+                       (1.5, 7.8, 0.8, 0.6), (9.0, 8.0, 1.2, 0.6), (14.0, 7.5, 0.6, 0.6)]:
+        segments += closed(box(x, y, w, h))
+    return segments, (16.5, 9.5), (-0.25, -0.25), (1.0, 4.5, 0.0)
+
+
 def rasterise(segments, size, origin):
     width = int(round(size[0] / RESOLUTION))
     height = int(round(size[1] / RESOLUTION))
@@ -132,7 +171,7 @@ def write(out_dir, name, world):
 
 
 WORLDS = {"carton_layout": carton_layout, "office": office, "office_turned": office_turned,
-          "calibration_room": calibration_room}
+          "calibration_room": calibration_room, "rooms": rooms}
 
 
 def read_pgm(path):
