@@ -20,6 +20,20 @@ geometry_msgs::Quaternion quaternionOfYaw(double yaw) {
   return q;
 }
 
+nav_msgs::Path toPathMessage(const std::vector<Vector2>& points, const std_msgs::Header& header) {
+  nav_msgs::Path path;
+  path.header = header;
+  for (const Vector2& point : points) {
+    geometry_msgs::PoseStamped stamped;
+    stamped.header = header;
+    stamped.pose.position.x = point.x();
+    stamped.pose.position.y = point.y();
+    stamped.pose.orientation.w = 1.0;
+    path.poses.push_back(stamped);
+  }
+  return path;
+}
+
 geometry_msgs::Pose toPoseMessage(const Pose2& pose) {
   geometry_msgs::Pose p;
   p.position.x = pose.x;

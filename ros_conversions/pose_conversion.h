@@ -8,8 +8,10 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Transform.h>
+#include <nav_msgs/Path.h>
 
 #include <boost/array.hpp>
+#include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
 
@@ -23,6 +25,10 @@ geometry_msgs::Quaternion quaternionOfYaw(double yaw);
 geometry_msgs::Pose toPoseMessage(const Pose2& pose);
 Pose2 fromPoseMessage(const geometry_msgs::Pose& pose);
 Pose2 fromTransformMessage(const geometry_msgs::Transform& transform);
+
+// A polyline as a path message: one pose a point, heading 0, each with
+// `header` (the frame and the stamp).
+nav_msgs::Path toPathMessage(const std::vector<Vector2>& points, const std_msgs::Header& header);
 
 // A planar laser's mount from its 3-D transform base → laser. `pose` is
 // planar: the translation and the heading of the laser's x axis (beam

@@ -113,6 +113,21 @@ TEST(PoseConversion, PlanarCovarianceIsTheXYYawBlock) {
   for (int i : {2, 3, 4, 14, 21, 28, 34}) EXPECT_EQ(written[i], 0.0) << i;
 }
 
+TEST(PoseConversion, APolylineBecomesAPathOfItsPointsWithTheHeader) {
+  std_msgs::Header header;
+  header.frame_id = "map";
+  header.stamp = ros::Time(12, 500);
+  const nav_msgs::Path path = toPathMessage({Vector2(1.0, 2.0), Vector2(-3.0, 0.5)}, header);
+  EXPECT_EQ(path.header.frame_id, "map");
+  ASSERT_EQ(path.poses.size(), 2u);
+  EXPECT_EQ(path.poses[1].header.stamp, ros::Time(12, 500));
+  EXPECT_EQ(path.poses[1].header.frame_id, "map");
+  EXPECT_DOUBLE_EQ(path.poses[0].pose.position.x, 1.0);
+  EXPECT_DOUBLE_EQ(path.poses[1].pose.position.y, 0.5);
+  EXPECT_DOUBLE_EQ(path.poses[1].pose.orientation.w, 1.0);
+  EXPECT_TRUE(toPathMessage({}, header).poses.empty());
+}
+
 }  // namespace
 }  // namespace ros_conversions
 }  // namespace ekf_slam

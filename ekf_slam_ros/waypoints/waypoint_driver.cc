@@ -11,7 +11,6 @@
 // obstacle) backs off and tries again, and gives up after max_backoffs
 // tries (BlockageRecovery in pure_pursuit.h); ~done then stays false.
 // Parameters: docs/simulation.md, "`waypoint_driver`".
-#include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
@@ -28,6 +27,7 @@
 
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
 #include "ekf_slam_ros/waypoints/waypoint_file.h"
+#include "ros_conversions/pose_conversion.h"
 #include "ros_params/private_params.h"
 
 namespace {
@@ -180,18 +180,10 @@ int main(int argc, char** argv) {
       std::vector<Vector2> path{pose.translation()};
       path.insert(path.end(), laps.begin(), laps.end());
       pursuit = std::make_unique<waypoints::PurePursuit>(path, params.pursuit);
-      nav_msgs::Path message;
-      message.header.stamp = now;
-      message.header.frame_id = params.global_frame;
-      for (const Vector2& point : path) {
-        geometry_msgs::PoseStamped stamped;
-        stamped.header = message.header;
-        stamped.pose.position.x = point.x();
-        stamped.pose.position.y = point.y();
-        stamped.pose.orientation.w = 1.0;
-        message.poses.push_back(stamped);
-      }
-      path_publisher.publish(message);
+      std_msgs::Header header;
+      header.stamp = now;
+      header.frame_id = params.global_frame;
+      path_publisher.publish(ekf_slam::ros_conversions::toPathMessage(path, header));
       ROS_INFO("waypoint_driver: starting at (%.2f, %.2f) in %s, %.1f m to drive", pose.x, pose.y,
                params.global_frame.c_str(), pursuit->remaining());
       last_update = now;
