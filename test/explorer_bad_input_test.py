@@ -12,6 +12,10 @@ origin) and the map drawn here on /map.
   reason ("no new map ... the newest map is too old") is on /diagnostics; a new map lets
   it drive on.
 - ~abort: the robot is stopped for good; a later map does not move it.
+- A second explorer (namespace budget, its map on budget_map) with a 4 s
+  time budget ends
+  exploring when it is spent, returns to its start (it stands there) and
+  finishes: ~done true, "the time budget is spent" on /diagnostics.
 """
 import sys
 import threading
@@ -24,6 +28,7 @@ import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import OccupancyGrid
+from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 
 RESOLUTION = 0.05
@@ -73,9 +78,14 @@ class Watcher:
         self.lock = threading.Lock()
         self.commands = []  # (monotonic, linear, angular)
         self.status = None
+        self.budget_status = None
+        self.budget_done = False
+        rospy.Subscriber("budget/explorer/done", Bool, self.on_budget_done, queue_size=1)
         rospy.Subscriber("cmd_vel", Twist, self.on_cmd, queue_size=100)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=20)
         self.map_publisher = rospy.Publisher("map", OccupancyGrid, queue_size=1, latch=True)
+        self.budget_map_publisher = rospy.Publisher("budget_map", OccupancyGrid, queue_size=1,
+                                                    latch=True)
         self.tf = tf2_ros.TransformBroadcaster()
         self.pose_thread = threading.Thread(target=self.publish_pose, daemon=True)
         self.pose_thread.start()
@@ -95,10 +105,17 @@ class Watcher:
         with self.lock:
             self.commands.append((time.monotonic(), message.linear.x, message.angular.z))
 
+    def on_budget_done(self, message):
+        self.budget_done = self.budget_done or message.data
+
     def on_diagnostics(self, message):
         for status in message.status:
-            if status.name.endswith("exploration"):
-                with self.lock:
+            if not status.name.endswith("exploration"):
+                continue
+            with self.lock:
+                if "budget" in status.name:
+                    self.budget_status = (status.level, status.message)
+                else:
                     self.status = (status.level, status.message)
 
     def moving_since(self, since):
@@ -191,6 +208,17 @@ class ExplorerBadInput(unittest.TestCase):
         time.sleep(3.0)
         self.assertFalse(w.moving_since(aborted), "moving after abort")
         self.assertFalse(call("explorer/resume").success)
+
+    def test_a_time_budget_ends_exploring(self):
+        w = self.w
+        w.budget_map_publisher.publish(open_map())
+        deadline = time.monotonic() + 30.0
+        while not w.budget_done and time.monotonic() < deadline:
+            time.sleep(0.2)
+        self.assertTrue(w.budget_done, "the budgeted explorer did not finish: %s" %
+                        (w.budget_status,))
+        time.sleep(1.5)  # its next /diagnostics
+        self.assertIn("the time budget is spent", w.budget_status[1], w.budget_status)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,39 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
 constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 
+// Per cell of a width × height grid, its distance in cells from the nearest
+// cell where `source` holds: Dijkstra outwards over 8-connected steps
+// (within 8 % of the Euclidean distance), up to `limit`; +inf beyond.
+std::vector<double> distanceFrom(int width, int height, const std::function<bool(int)>& source,
+                                 double limit) {
+  std::vector<double> distance(static_cast<size_t>(width) * height, kInfinity);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  for (int c = 0; c < width * height; ++c) {
+    if (source(c)) {
+      distance[c] = 0.0;
+      open.push({0.0, c});
+    }
+  }
+  while (!open.empty()) {
+    const auto [d, c] = open.top();
+    open.pop();
+    if (d > distance[c]) continue;
+    const int x = c % width, y = c / width;
+    for (int k = 0; k < 8; ++k) {
+      const int nx = x + kDx[k], ny = y + kDy[k];
+      if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+      const int n = ny * width + nx;
+      const double next = d + (k < 4 ? 1.0 : std::sqrt(2.0));
+      if (next < distance[n] && next <= limit) {
+        distance[n] = next;
+        open.push({next, n});
+      }
+    }
+  }
+  return distance;
+}
+
 }  // namespace
 
 ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptions& options)
@@ -52,35 +85,16 @@ ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptio
       }
     }
   }
-  // Clearance up to wall_clearance: Dijkstra outwards from every known,
-  // non-free cell (8-connected steps, within 8 % of the Euclidean distance).
+  // Clearance from every known, non-free cell, as far as the wall cost and
+  // the goals' clearance need it.
+  const double reach_m = std::max(options.wall_clearance, options.goal_clearance);
+  if (reach_m <= 0.0) return;
+  clearance_ = distanceFrom(
+      width_, height_, [this](int c) { return !unknown(c) && !free(c); }, reach_m / resolution_);
+  for (double& d : clearance_) d *= resolution_;
   if (options.wall_clearance <= 0.0 || options.wall_penalty <= 0.0) return;
-  const double limit = options.wall_clearance / resolution_;
-  std::vector<double> clearance(cells_.size(), kInfinity);
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
-  for (int c = 0; c < cellCount(); ++c) {
-    if (!unknown(c) && !free(c)) {
-      clearance[c] = 0.0;
-      open.push({0.0, c});
-    }
-  }
-  while (!open.empty()) {
-    const auto [d, c] = open.top();
-    open.pop();
-    if (d > clearance[c]) continue;
-    const int x = c % width_, y = c / width_;
-    for (int k = 0; k < 8; ++k) {
-      const int nx = x + kDx[k], ny = y + kDy[k];
-      if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) continue;
-      const int n = ny * width_ + nx;
-      const double next = d + (k < 4 ? 1.0 : std::sqrt(2.0));
-      if (next < clearance[n] && next < limit) {
-        clearance[n] = next;
-        open.push({next, n});
-      }
-    }
-  }
+  const double limit = options.wall_clearance;
+  const std::vector<double>& clearance = clearance_;
   for (int c = 0; c < cellCount(); ++c) {
     if (clearance[c] < limit)
       weight_[c] = 1.0 + options.wall_penalty * (1.0 - clearance[c] / limit);
@@ -258,6 +272,8 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
     }
     return steps;
   };
+  const int search =
+      std::max(1, static_cast<int>(std::ceil(options.goal_clearance / grid.resolution())));
   const int piece_cells =
       std::max(1, static_cast<int>(std::round(options.max_frontier_length / grid.resolution())));
   std::vector<Frontier> out;
@@ -294,23 +310,28 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
       if (f.cells.empty() || (pieces > 1 && f.length < options.min_frontier_length)) continue;
       for (int cell : f.cells) f.centroid += grid.centre(cell);
       f.centroid /= static_cast<double>(f.cells.size());
-      // The goal: the reachable cell, among the piece's cells and their
-      // neighbours (a frontier cell may lie inside the inflation), nearest
-      // its centroid.
+      // The goal: the reachable cell with goal_clearance, among the piece's
+      // cells and those within goal_clearance of them (a frontier cell may
+      // lie inside the inflation, or too near a wall to turn), nearest its
+      // centroid.
       double best = kInfinity;
       f.distance = kInfinity;
       for (int cell : f.cells) {
         const int x = cell % w, y = cell / w;
-        for (int k = -1; k < 8; ++k) {
-          const int nx = k < 0 ? x : x + kDx[k], ny = k < 0 ? y : y + kDy[k];
-          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-          const int n = ny * w + nx;
-          if (!reach.reachable(n)) continue;
-          const double d = (grid.centre(n) - f.centroid).squaredNorm();
-          if (d < best || (d == best && reach.distance[n] < f.distance)) {
-            best = d;
-            f.goal = n;
-            f.distance = reach.distance[n];
+        for (int dy = -search; dy <= search; ++dy) {
+          for (int dx = -search; dx <= search; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= w || ny >= h || dx * dx + dy * dy > search * search) {
+              continue;
+            }
+            const int n = ny * w + nx;
+            if (!reach.reachable(n) || grid.clearance(n) < options.goal_clearance) continue;
+            const double d = (grid.centre(n) - f.centroid).squaredNorm();
+            if (d < best || (d == best && reach.distance[n] < f.distance)) {
+              best = d;
+              f.goal = n;
+              f.distance = reach.distance[n];
+            }
           }
         }
       }
@@ -349,31 +370,8 @@ std::vector<int> segmentRooms(const ExplorationGrid& grid, double door_width) {
   if (door_width <= 0.0) return label;
   // Clearance (cells) from every cell that is not free, up to the core's.
   const double core = 0.5 * door_width / grid.resolution();
-  std::vector<double> clearance(n, kInfinity);
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
-  for (int c = 0; c < n; ++c) {
-    if (!grid.free(c)) {
-      clearance[c] = 0.0;
-      open.push({0.0, c});
-    }
-  }
-  while (!open.empty()) {
-    const auto [d, c] = open.top();
-    open.pop();
-    if (d > clearance[c]) continue;
-    const int x = c % w, y = c / w;
-    for (int k = 0; k < 8; ++k) {
-      const int nx = x + kDx[k], ny = y + kDy[k];
-      if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-      const int m = ny * w + nx;
-      const double next = d + (k < 4 ? 1.0 : std::sqrt(2.0));
-      if (next < clearance[m] && next <= core + 1.0) {
-        clearance[m] = next;
-        open.push({next, m});
-      }
-    }
-  }
+  const std::vector<double> clearance = distanceFrom(
+      w, h, [&grid](int c) { return !grid.free(c); }, core + 1.0);
   // The cores, numbered by connected component (8-neighbours).
   int rooms = 0;
   std::vector<int> frontier_cells;

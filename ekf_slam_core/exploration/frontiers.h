@@ -17,7 +17,9 @@
 //   an unknown cell (4-neighbours), at least `min_frontier_length` long, cut
 //   into pieces of at most `max_frontier_length` along its length (a room's
 //   whole unseen edge is many places to look from, not one); its goal is
-//   the reachable cell among and beside its cells nearest its centroid.
+//   the reachable cell nearest its centroid among its cells and those
+//   within goal_clearance of them that keep goal_clearance from obstacles
+//   (room for the robot to turn there).
 // - chooseFrontier() prefers finishing the robot's current room (a room
 //   label per position, e.g. from the walls and doorways of
 //   mecp/room_gating.h), then the lowest cost: path length minus
@@ -27,6 +29,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +45,7 @@ struct ExplorationOptions {
   double robot_radius = 0.4;         // m: cells nearer a non-free known cell are not traversable
   double wall_clearance = 0.8;       // m: cells nearer an obstacle than this cost more to cross
   double wall_penalty = 3.0;         // extra cost of a step at the inflation's edge (× its length)
+  double goal_clearance = 0.5;       // m from obstacles a goal keeps: room to turn on the spot
   double min_frontier_length = 0.5;  // m of frontier (cells times resolution)
   double max_frontier_length = 2.0;  // m: longer frontiers are cut into pieces this long
   double gain_weight = 1.0;          // m of path a metre of frontier is worth
@@ -53,6 +57,7 @@ struct ExplorationOptions {
     v.number("robot_radius", robot_radius, Bounds::closed(0.0, 5.0, "m"));
     v.number("wall_clearance", wall_clearance, Bounds::closed(0.0, 10.0, "m"));
     v.number("wall_penalty", wall_penalty, Bounds::closed(0.0, 100.0, ""));
+    v.number("goal_clearance", goal_clearance, Bounds::closed(0.0, 5.0, "m"));
     v.number("min_frontier_length", min_frontier_length, Bounds::closed(0.0, 100.0, "m"));
     v.number("max_frontier_length", max_frontier_length, Bounds::closed(0.1, 1000.0, "m"));
     v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));
@@ -81,6 +86,11 @@ class ExplorationGrid {
   bool traversable(int cell) const { return traversable_[cell]; }
   // The cost of one metre through `cell` (1 away from obstacles).
   double stepWeight(int cell) const { return weight_[cell]; }
+  // The distance (m) from `cell` to the nearest known, non-free cell, up to
+  // max(wall_clearance, goal_clearance); +inf beyond.
+  double clearance(int cell) const {
+    return clearance_.empty() ? std::numeric_limits<double>::infinity() : clearance_[cell];
+  }
 
  private:
   int width_ = 0, height_ = 0;
@@ -91,6 +101,7 @@ class ExplorationGrid {
   std::vector<int8_t> cells_;
   std::vector<bool> traversable_;
   std::vector<double> weight_;
+  std::vector<double> clearance_;  // m; empty when neither option needs it
 };
 
 // Marks the unknown cells within `radius` of `p` free: the floor under the

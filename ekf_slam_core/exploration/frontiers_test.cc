@@ -200,6 +200,28 @@ TEST(Planner, ACostNearTheWallsKeepsThePathToTheCorridorsMiddle) {
   EXPECT_NEAR(farthestFromTheWall(options), 0.8, 0.06) << "the middle, 0.7 m from either face";
 }
 
+// A frontier across the end of a corridor, 0.4 m before its end wall: its
+// goal keeps goal_clearance from the walls, so that the robot can turn on
+// the spot there.
+TEST(Frontiers, AGoalKeepsRoomToTurnFromTheWalls) {
+  std::vector<std::string> rows = corridor();
+  for (size_t r = 1; r + 1 < rows.size(); ++r) rows[r].replace(38, 3, "???");
+  ExplorationOptions options;
+  options.robot_radius = 0.25;
+  for (double goal_clearance : {0.0, 0.5}) {
+    options.goal_clearance = goal_clearance;
+    const ExplorationGrid grid(drawn(rows), options);
+    const Reach reach = reachFrom(grid, Vector2(0.7, 0.8));
+    const std::vector<Frontier> frontiers = findFrontiers(grid, reach, options);
+    ASSERT_EQ(frontiers.size(), 1u);
+    ASSERT_GE(frontiers[0].goal, 0);
+    EXPECT_GE(grid.clearance(frontiers[0].goal), goal_clearance);
+    if (goal_clearance == 0.0) {
+      EXPECT_LT(grid.clearance(frontiers[0].goal), 0.5) << "the frontier itself, by the wall";
+    }
+  }
+}
+
 TEST(Planner, ASimplifiedPathKeepsItsCornersAndDropsTheStraightRuns) {
   std::vector<Vector2> path;
   for (int i = 0; i <= 10; ++i) path.emplace_back(0.1 * i, 0.0);

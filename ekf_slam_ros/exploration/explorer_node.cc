@@ -26,7 +26,6 @@
 // Services: ~pause, ~resume, ~abort (std_srvs/Trigger).
 // Parameters: config/exploration.yaml, docs/simulation.md "Exploration".
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
@@ -53,6 +52,7 @@
 #include "ekf_slam_core/exploration/frontiers.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
+#include "ros_conversions/pose_conversion.h"
 #include "ros_params/param_fields.h"
 
 namespace {
@@ -284,7 +284,7 @@ class Explorer {
 
   bool needsPlan(const ros::Time& now) {
     if (!pursuit_) return plan_now_ || map_changed_;
-    if (recovery_.state() == waypoints::RecoveryState::kGaveUp) return true;
+    if (pathFailed()) return true;
     if (pursuit_->done()) {
       // At a frontier goal the next plan waits for a map made since the
       // arrival: the one it arrived with does not show what it sees there
@@ -337,10 +337,11 @@ class Explorer {
     }
     ekf_slam::clearFootprint(&map, robot, params_.exploration.robot_radius);
     ekf_slam::clearFootprint(&map, home_->translation(), params_.exploration.robot_radius);
-    const ekf_slam::ExplorationGrid grid(map, params_.exploration);
+    grid_view_ = std::make_shared<const ekf_slam::ExplorationGrid>(map, params_.exploration);
+    const ekf_slam::ExplorationGrid& grid = *grid_view_;
     // Why the previous path ends, if it does.
     if (pursuit_ && goal_ && phase_ == Phase::kExploring) {
-      if (recovery_.state() == waypoints::RecoveryState::kGaveUp) {
+      if (pathFailed()) {
         countTry(*goal_, "blocked on the way (the safety gate or a stall held the robot)");
       } else if (pursuit_->done()) {
         countTry(*goal_, "reached, but the frontier stays (unknown cells the laser does not see)");
@@ -379,8 +380,7 @@ class Explorer {
     // Keep going to the same goal while its frontier lasts and the path
     // stays open; a new path only when one of them changes.
     const bool same_goal = goal_ && (goal - *goal_).norm() < params_.goal_radius;
-    if (same_goal && pursuit_ && !pursuit_->done() &&
-        recovery_.state() != waypoints::RecoveryState::kGaveUp &&
+    if (same_goal && pursuit_ && !pursuit_->done() && !pathFailed() &&
         ekf_slam::pathClear(grid, path_)) {
       return;
     }
@@ -399,8 +399,7 @@ class Explorer {
       // The pursuit ended short of home (its tolerance, or the map moved).
       if (++home_tries_ > params_.max_goal_tries) return finish();
     }
-    if (recovery_.state() == waypoints::RecoveryState::kGaveUp &&
-        ++home_tries_ > params_.max_goal_tries) {
+    if (pathFailed() && ++home_tries_ > params_.max_goal_tries) {
       return fail("the way back to the start is blocked");
     }
     const ekf_slam::Reach reach = ekf_slam::reachFrom(grid, robot);
@@ -421,8 +420,7 @@ class Explorer {
     std::vector<Vector2> path = ekf_slam::pathTo(grid, reach, home_cell);
     if (path.empty()) return fail("the start is not reachable on the map");
     if (grid.traversable(grid.cellAt(home))) path.back() = home;
-    if (pursuit_ && !pursuit_->done() && recovery_.state() != waypoints::RecoveryState::kGaveUp &&
-        ekf_slam::pathClear(grid, path_)) {
+    if (pursuit_ && !pursuit_->done() && !pathFailed() && ekf_slam::pathClear(grid, path_)) {
       return;
     }
     follow(ekf_slam::simplifyPath(path, grid.resolution()), now, !pursuit_);
@@ -436,23 +434,41 @@ class Explorer {
     path_ = path;
     pursuit_ = std::make_unique<waypoints::PurePursuit>(path, params_.pursuit);
     reached_.reset();
-    if (new_goal || recovery_.state() == waypoints::RecoveryState::kGaveUp) {
+    if (new_goal || pathFailed()) {
       recovery_ = waypoints::BlockageRecovery(params_.recovery);
     }
+    cornered_ = false;
     last_update_ = now;
     anything_planned_ = true;
-    nav_msgs::Path message;
-    message.header.stamp = now;
-    message.header.frame_id = params_.global_frame;
-    for (const Vector2& p : path) {
-      geometry_msgs::PoseStamped stamped;
-      stamped.header = message.header;
-      stamped.pose.position.x = p.x();
-      stamped.pose.position.y = p.y();
-      stamped.pose.orientation.w = 1.0;
-      message.poses.push_back(stamped);
+    std_msgs::Header header;
+    header.stamp = now;
+    header.frame_id = params_.global_frame;
+    path_publisher_.publish(ekf_slam::ros_conversions::toPathMessage(path, header));
+  }
+
+  // The path failed: blocked with back-offs spent, or with no room for one.
+  bool pathFailed() const {
+    return cornered_ || recovery_.state() == waypoints::RecoveryState::kGaveUp;
+  }
+
+  // Whether the map shows free cells behind the robot for a back-off: the
+  // strip robot_radius wide either side, from the robot's centre to
+  // robot_radius + backoff_distance behind it (its rear and the back-off).
+  bool roomBehind(const Pose2& pose) const {
+    if (!grid_view_) return false;
+    const ekf_slam::ExplorationGrid& grid = *grid_view_;
+    const double radius = params_.exploration.robot_radius;
+    const double length = radius + params_.recovery.backoff_distance;
+    const Vector2 back(-std::cos(pose.theta), -std::sin(pose.theta));
+    const Vector2 left(-back.y(), back.x());
+    const double step = 0.5 * grid.resolution();
+    for (double s = 0.0; s <= length; s += step) {
+      for (double l = -radius; l <= radius; l += step) {
+        const int cell = grid.cellAt(pose.translation() + s * back + l * left);
+        if (cell < 0 || !grid.free(cell)) return false;
+      }
     }
-    path_publisher_.publish(message);
+    return true;
   }
 
   void drive(const Pose2& pose, const ros::Time& now) {
@@ -464,6 +480,17 @@ class Explorer {
     const waypoints::VelocityCommand command =
         recovery_.update(pose, now.toSec(), wanted, pursuit_->remaining());
     if (recovery_.state() != before) {
+      if (recovery_.state() == waypoints::RecoveryState::kBackingOff && !roomBehind(pose)) {
+        // The laser does not see behind the robot: a back-off into what the
+        // map shows occupied or does not know would touch it.
+        ROS_WARN(
+            "explorer: blocked at (%.2f, %.2f): no progress for %.1f s, and the map shows no "
+            "room to back off %.2f m; this path is given up",
+            pose.x, pose.y, params_.recovery.stuck_time, params_.recovery.backoff_distance);
+        cornered_ = true;
+        stop();
+        return;
+      }
       if (recovery_.state() == waypoints::RecoveryState::kBackingOff) {
         ROS_WARN(
             "explorer: blocked at (%.2f, %.2f): no progress for %.1f s; backing off (%d of %d)",
@@ -678,9 +705,11 @@ class Explorer {
 
   Phase phase_ = Phase::kStarting;
   std::optional<ekf_slam::GridMapFile> grid_;
+  std::shared_ptr<const ekf_slam::ExplorationGrid> grid_view_;  // the last plan's, inflated
   ros::Time map_received_, started_, last_plan_, last_update_;
   bool map_changed_ = false;
   bool paused_ = false;
+  bool cornered_ = false;  // blocked with no room behind to back off
   bool anything_planned_ = false;
   bool plan_now_ = true;           // plan on the next step, new map or not
   std::string nothing_reachable_;  // why no frontier can be driven to, empty when one can
