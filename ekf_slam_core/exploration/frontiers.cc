@@ -92,12 +92,18 @@ ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptio
   clearance_ = distanceFrom(
       width_, height_, [this](int c) { return !unknown(c) && !free(c); }, reach_m / resolution_);
   for (double& d : clearance_) d *= resolution_;
-  if (options.wall_clearance <= 0.0 || options.wall_penalty <= 0.0) return;
+  if (options.wall_clearance <= 0.0 ||
+      (options.wall_penalty <= 0.0 && options.narrow_penalty <= 1.0)) {
+    return;
+  }
   const double limit = options.wall_clearance;
   const std::vector<double>& clearance = clearance_;
   for (int c = 0; c < cellCount(); ++c) {
     if (clearance[c] < limit)
       weight_[c] = 1.0 + options.wall_penalty * (1.0 - clearance[c] / limit);
+    // Where the robot cannot turn (less than goal_clearance), only a door
+    // with no way round is worth crossing.
+    if (clearance[c] < options.goal_clearance) weight_[c] *= options.narrow_penalty;
   }
 }
 

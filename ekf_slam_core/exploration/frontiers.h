@@ -12,7 +12,10 @@
 //   obstacles: by wall_penalty × (wall_clearance − clearance) / wall_clearance
 //   of it where the cell's clearance (distance to the nearest non-free known
 //   cell) is below wall_clearance, so paths keep to the middle of a
-//   corridor or a door rather than grazing the inflation's edge.
+//   corridor or a door rather than grazing the inflation's edge; a step
+//   where the clearance is below goal_clearance (no room to turn on the
+//   spot) costs narrow_penalty times more again, so that the robot squeezes
+//   past furniture only where there is no way round.
 // - A frontier is a connected group (8-neighbours) of free cells that touch
 //   an unknown cell (4-neighbours), at least `min_frontier_length` long, cut
 //   into pieces of at most `max_frontier_length` along its length (a room's
@@ -46,6 +49,7 @@ struct ExplorationOptions {
   double wall_clearance = 0.8;       // m: cells nearer an obstacle than this cost more to cross
   double wall_penalty = 3.0;         // extra cost of a step at the inflation's edge (× its length)
   double goal_clearance = 0.5;       // m from obstacles a goal keeps: room to turn on the spot
+  double narrow_penalty = 10.0;      // cost factor of a step with less than goal_clearance
   double min_frontier_length = 0.5;  // m of frontier (cells times resolution)
   double max_frontier_length = 2.0;  // m: longer frontiers are cut into pieces this long
   double gain_weight = 1.0;          // m of path a metre of frontier is worth
@@ -58,6 +62,7 @@ struct ExplorationOptions {
     v.number("wall_clearance", wall_clearance, Bounds::closed(0.0, 10.0, "m"));
     v.number("wall_penalty", wall_penalty, Bounds::closed(0.0, 100.0, ""));
     v.number("goal_clearance", goal_clearance, Bounds::closed(0.0, 5.0, "m"));
+    v.number("narrow_penalty", narrow_penalty, Bounds::closed(1.0, 1000.0, ""));
     v.number("min_frontier_length", min_frontier_length, Bounds::closed(0.0, 100.0, "m"));
     v.number("max_frontier_length", max_frontier_length, Bounds::closed(0.1, 1000.0, "m"));
     v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));

@@ -78,7 +78,8 @@ std::vector<std::string> twoRoomsWithADoor(int door_cells) {
 TEST(Planner, PassesADoorWiderThanTheRobotAndNotANarrowerOne) {
   ExplorationOptions options;
   options.robot_radius = 0.25;
-  options.wall_penalty = 0.0;                         // path lengths in plain metres
+  options.wall_penalty = 0.0;  // path lengths in plain metres
+  options.narrow_penalty = 1.0;
   const Vector2 left(0.85, 1.05), right(3.35, 1.05);  // cell centres, 25 cells apart
   {
     const ExplorationGrid grid(drawn(twoRoomsWithADoor(8)), options);  // 0.8 m
@@ -156,6 +157,7 @@ TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   ExplorationOptions options;
   options.robot_radius = 0.15;
   options.wall_penalty = 0.0;  // plain path lengths: the door's frontier is the nearer
+  options.narrow_penalty = 1.0;
   const ExplorationGrid grid(drawn(rows), options);
   const Vector2 robot(1.9, 0.5);  // left room, near the door
   const Reach reach = reachFrom(grid, robot);
@@ -194,6 +196,7 @@ TEST(Planner, ACostNearTheWallsKeepsThePathToTheCorridorsMiddle) {
     return highest;
   };
   options.wall_penalty = 0.0;
+  options.narrow_penalty = 1.0;
   EXPECT_LT(farthestFromTheWall(options), 0.5) << "the shortest path hugs the wall";
   options.wall_penalty = 3.0;
   options.wall_clearance = 0.8;
@@ -220,6 +223,32 @@ TEST(Frontiers, AGoalKeepsRoomToTurnFromTheWalls) {
       EXPECT_LT(grid.clearance(frontiers[0].goal), 0.5) << "the frontier itself, by the wall";
     }
   }
+}
+
+// A cabinet in a room: a 0.5 m gap above it, 1 m of floor below it. The
+// shortest path squeezes through the gap, where the robot could not turn;
+// narrow_penalty sends it round below.
+TEST(Planner, ANarrowGapIsCrossedOnlyWithoutAWayRound) {
+  std::vector<std::string> rows(22, "#" + std::string(40, '.') + "#");
+  rows.front() = rows.back() = std::string(42, '#');
+  for (int r = 11; r <= 15; ++r) rows[rows.size() - 1 - r].replace(18, 5, "#####");
+  ExplorationOptions options;
+  options.robot_radius = 0.2;
+  options.wall_penalty = 0.0;
+  options.goal_clearance = 0.5;
+  auto heightPastTheCabinet = [&](double narrow_penalty) {
+    options.narrow_penalty = narrow_penalty;
+    const ExplorationGrid grid(drawn(rows), options);
+    const Reach reach = reachFrom(grid, Vector2(0.55, 1.85));
+    const std::vector<Vector2> path = pathTo(grid, reach, grid.cellAt(Vector2(3.55, 1.85)));
+    EXPECT_FALSE(path.empty());
+    for (const Vector2& p : path) {
+      if (std::abs(p.x() - 2.05) < 0.01) return p.y();
+    }
+    return -1.0;
+  };
+  EXPECT_GT(heightPastTheCabinet(1.0), 1.6) << "through the gap";
+  EXPECT_LT(heightPastTheCabinet(10.0), 1.1) << "round below";
 }
 
 TEST(Planner, ASimplifiedPathKeepsItsCornersAndDropsTheStraightRuns) {

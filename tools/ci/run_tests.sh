@@ -11,7 +11,7 @@ source "$ws/devel/setup.bash"
 export ROS_HOME="$ws/ros_home"
 rm -rf "$ROS_HOME/log"
 mkdir -p "$ROS_HOME"
-# Three lanes, one test at a time in each. Most of the time of the tests of
+# Two lanes, one test at a time in each. Most of the time of the tests of
 # the drivers and of the simulated robot is wall-clock time of serial links
 # at their real baud rates (a lap of the simulated robot takes minutes and a
 # fraction of one core): those tests, the real-time lane, share the machine
@@ -19,10 +19,6 @@ mkdir -p "$ROS_HOME"
 # the gtests. The real-time lane: rostests whose launch file includes
 # sim.launch, and every test of the driver packages (p3dx_*, lms200_*,
 # serial_io, and the rostests of p3dx_driver and sick_lms200_driver).
-# The unattended explorations of the simulated worlds (launch files that set
-# sim.launch's explore true) take minutes of real time each and a fraction
-# of a core: a third lane of their own, so that they do not lengthen the
-# real-time lane.
 # TEST_LANES=1 runs everything in one lane, as `catkin_make run_tests -j1`
 # does.
 # catkin's run_tests_<package>_<type>_<name> targets run one test each;
@@ -31,32 +27,25 @@ mkdir -p "$ROS_HOME"
 # tests before them.
 targets=$(make -C "$ws/build" help | sed -n 's/^\.\.\. \(run_tests_ekf_slam_\(gtest\|rostest\|roslaunch-check\)_.*\)$/\1/p')
 realtime=()
-explore=()
 rest=()
 for target in $targets; do
   lane=rest
   case $target in
     run_tests_ekf_slam_rostest_test_*)
-      test_file="$root/test/${target#run_tests_ekf_slam_rostest_test_}"
-      if grep -q 'name="explore" value="true"' "$test_file" 2>/dev/null; then
-        lane=explore
-      elif grep -q 'launch/sim.launch' "$test_file" 2>/dev/null; then
-        lane=realtime
-      fi ;;
+      grep -q 'launch/sim.launch' "$root/test/${target#run_tests_ekf_slam_rostest_test_}" 2>/dev/null &&
+        lane=realtime ;;
     run_tests_ekf_slam_gtest_p3dx_* | run_tests_ekf_slam_gtest_lms200_* | \
       run_tests_ekf_slam_gtest_serial_io_* | run_tests_ekf_slam_rostest_p3dx_driver_* | \
       run_tests_ekf_slam_rostest_sick_lms200_driver_*)
       lane=realtime ;;
   esac
-  if [ "${TEST_LANES:-3}" = 1 ] || [ $lane = rest ]; then
-    rest+=("$target")
-  elif [ $lane = explore ]; then
-    explore+=("$target")
-  else
+  if [ "${TEST_LANES:-2}" != 1 ] && [ $lane = realtime ]; then
     realtime+=("$target")
+  else
+    rest+=("$target")
   fi
 done
-echo "run_tests: ${#realtime[@]} tests of the drivers and the simulated robot and ${#explore[@]} explorations beside ${#rest[@]} others; logs $ws/run_tests_*.log"
+echo "run_tests: ${#realtime[@]} tests of the drivers and the simulated robot beside ${#rest[@]} others; logs $ws/run_tests_*.log"
 run_lane() {  # run_lane LOG TARGET...: each target in turn, on past failures
   local log=$1
   shift
@@ -65,14 +54,10 @@ run_lane() {  # run_lane LOG TARGET...: each target in turn, on past failures
 }
 run_lane "$ws/run_tests_realtime.log" "${realtime[@]}" &
 realtime_pid=$!
-run_lane "$ws/run_tests_explore.log" "${explore[@]}" &
-explore_pid=$!
 run_lane "$ws/run_tests_rest.log" "${rest[@]}"
 status=$?
 wait $realtime_pid || status=$?
-wait $explore_pid || status=$?
-cat "$ws/run_tests_rest.log" "$ws/run_tests_realtime.log" "$ws/run_tests_explore.log" \
-  > "$ws/run_tests.log" 2>/dev/null
+cat "$ws/run_tests_rest.log" "$ws/run_tests_realtime.log" > "$ws/run_tests.log" 2>/dev/null
 grep -E '^\[ *(RUN|  FAILED|  SKIPPED) *\]|^\[ROSTEST\]|^\[ROSUNIT\]|FAILURE|rostest.*failed' "$ws/run_tests.log" | grep -v '^\[ RUN' | tail -n 60 || true
 if [ $status -ne 0 ]; then
   echo "run_tests: running the tests exited with $status; log: $ws/run_tests.log" >&2
@@ -84,7 +69,7 @@ grep -h 'process has died.*exit code -' "$ROS_HOME"/log/rostest-*.log 2>/dev/nul
 # Each test target leaves one result file (rosunit's are a rostest's
 # inner report); fewer means results were lost, and the counts below are
 # short by whatever they held.
-expected=$(( ${#realtime[@]} + ${#explore[@]} + ${#rest[@]} ))
+expected=$(( ${#realtime[@]} + ${#rest[@]} ))
 found=$(find "$results" -name 'gtest-*.xml' -o -name 'rostest-*.xml' -o -name 'roslaunch-check*.xml' | wc -l)
 if [ "$found" -lt "$expected" ]; then
   echo "run_tests: $found result files for $expected test targets: some results were lost" >&2
