@@ -121,7 +121,10 @@ class ReplayTest(unittest.TestCase):
         # A queue of 1,000 per topic: on a loaded machine rosbag play would
         # otherwise drop messages a subscriber has not read yet (its default
         # is 100), before the node could see or count them.
-        command = ["rosbag", "play", "--clock", "--quiet", "--queue=1000", "-r",
+        # --delay: after advertising, the player waits 2 s (not its 0.2 s)
+        # for the subscribers to connect; on a sandboxed machine the node
+        # otherwise missed the first scans.
+        command = ["rosbag", "play", "--clock", "--quiet", "--queue=1000", "--delay=2", "-r",
                    str(self.args.rate)]
         if seconds > 0:
             command += ["-u", str(seconds)]
