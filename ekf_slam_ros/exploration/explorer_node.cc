@@ -294,8 +294,8 @@ class Explorer {
     return (now - last_plan_).toSec() >= params_.replan_period && map_changed_;
   }
 
-  // Records a try at the goal; true when it is now given up.
-  bool countTry(const Vector2& goal, const std::string& why) {
+  // Records a try at the goal, and gives it up after max_goal_tries.
+  void countTry(const Vector2& goal, const std::string& why) {
     GoalRecord* record = nullptr;
     for (GoalRecord& r : goals_) {
       if ((r.at - goal).norm() < params_.goal_radius) record = &r;
@@ -310,9 +310,7 @@ class Explorer {
       ++given_up_;
       ROS_WARN("explorer: giving up the frontier goal at (%.2f, %.2f) after %d tries: %s", goal.x(),
                goal.y(), record->tries, why.c_str());
-      return true;
     }
-    return false;
   }
 
   bool givenUp(const Vector2& goal) const {
