@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """explorer_node on bad input (test/explorer_bad_input.test): the node alone,
-the robot's pose published here on /tf (map -> base_link, at rest at the
-origin) and the map drawn here on /map.
+the robot's pose published here on /tf (map -> odom -> base_link, at rest
+at the origin) and the map drawn here on /map.
 
 - An empty map (every cell unknown): nothing is reachable; the robot is
   held at rest and the reason is an ERROR on /diagnostics.
@@ -93,12 +93,17 @@ class Watcher:
     def publish_pose(self):
         rate = rospy.Rate(20)
         while not rospy.is_shutdown():
-            t = TransformStamped()
-            t.header.stamp = rospy.Time.now()
-            t.header.frame_id = "map"
-            t.child_frame_id = "base_link"
-            t.transform.rotation.w = 1.0
-            self.tf.sendTransform(t)
+            # REP-105: map -> odom (SLAM) -> base_link (odometry).
+            stamp = rospy.Time.now()
+            transforms = []
+            for parent, child in (("map", "odom"), ("odom", "base_link")):
+                t = TransformStamped()
+                t.header.stamp = stamp
+                t.header.frame_id = parent
+                t.child_frame_id = child
+                t.transform.rotation.w = 1.0
+                transforms.append(t)
+            self.tf.sendTransform(transforms)
             rate.sleep()
 
     def on_cmd(self, message):

@@ -242,6 +242,25 @@ bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path) {
   return true;
 }
 
+bool stripFree(const ExplorationGrid& grid, const Vector2& from, const Vector2& to,
+               double half_width) {
+  const double length = (to - from).norm();
+  const Vector2 along = length > 0.0 ? Vector2((to - from) / length) : Vector2(1.0, 0.0);
+  const Vector2 across(-along.y(), along.x());
+  const double step = 0.5 * grid.resolution();
+  const int steps_along = static_cast<int>(std::ceil(length / step));
+  const int steps_across = static_cast<int>(std::ceil(half_width / step));
+  for (int i = 0; i <= steps_along; ++i) {
+    const Vector2 centre = from + along * std::min(length, i * step);
+    for (int j = -steps_across; j <= steps_across; ++j) {
+      const double offset = std::clamp(j * step, -half_width, half_width);
+      const int cell = grid.cellAt(centre + across * offset);
+      if (cell < 0 || !grid.free(cell)) return false;
+    }
+  }
+  return true;
+}
+
 std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& reach,
                                     const ExplorationOptions& options) {
   const int w = grid.width(), h = grid.height();

@@ -158,6 +158,14 @@ std::vector<Vector2> simplifyPath(const std::vector<Vector2>& path, double toler
 // radius from its first point (the robot may start beside a wall).
 bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path);
 
+// Whether the map shows free floor for a straight move the laser does not
+// watch (a back-off): every cell of the strip `half_width` either side of
+// the segment from `from` to `to`, sampled at half a cell, is known and
+// free. The strip is the robot's body, not its turning circle: a robot
+// standing in a door can back out of it.
+bool stripFree(const ExplorationGrid& grid, const Vector2& from, const Vector2& to,
+               double half_width);
+
 // The room of a position (map frame), or -1 where none is known.
 using RoomOf = std::function<int(const Vector2&)>;
 

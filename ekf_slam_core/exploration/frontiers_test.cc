@@ -109,6 +109,23 @@ TEST(Planner, PassesADoorWiderThanTheRobotAndNotANarrowerOne) {
   }
 }
 
+TEST(Planner, ARobotInADoorCanBackOutOfItWhereTheFloorIsKnown) {
+  // A 0.7 m door (y 0.6 to 1.3) in the wall at x = 2.05; the robot stands
+  // in its middle heading +x, and backs 0.5 m towards -x.
+  const ExplorationGrid grid(drawn(twoRoomsWithADoor(7)), ExplorationOptions{});
+  const Vector2 in_door(2.05, 0.95), behind(1.55, 0.95);
+  // Its body (0.25 m either side) fits; its turning circle (0.4 m) does not.
+  EXPECT_TRUE(stripFree(grid, in_door, behind, 0.25));
+  EXPECT_FALSE(stripFree(grid, in_door, behind, 0.4));
+  // Off the door's middle by 0.15 m, the body meets the door's jamb.
+  EXPECT_FALSE(stripFree(grid, in_door + Vector2(0.0, 0.15), behind + Vector2(0.0, 0.15), 0.25));
+  // Floor the map does not know is no room either.
+  GridMapFile unknown_behind = drawn(twoRoomsWithADoor(7));
+  unknown_behind.cells[grid.cellAt(Vector2(1.75, 0.95))] = -1;
+  EXPECT_FALSE(
+      stripFree(ExplorationGrid(unknown_behind, ExplorationOptions{}), in_door, behind, 0.25));
+}
+
 TEST(Planner, AStartBesideAWallStillGetsOutAndAStartInTheUnknownReachesNothing) {
   ExplorationOptions options;
   options.robot_radius = 0.25;

@@ -15,8 +15,12 @@
 // max_backoffs back-offs), is tried again up to max_goal_tries times and
 // then given up, with the reason in the log.
 //
+// Whether the robot moves (the recovery's watch, the distance driven) is
+// judged on the odometry (odom_frame -> base_frame): the SLAM pose jumps
+// with each correction.
+//
 // The robot stops (a zero cmd_vel, with the reason on /diagnostics) while
-// its pose is lost, while `map` is older than map_timeout, while paused,
+// its pose or its odometry is lost, while `map` is older than map_timeout, while paused,
 // and for good on abort, when nothing is reachable, and at the end.
 //
 // Topics: map (nav_msgs/OccupancyGrid) in; cmd_vel (geometry_msgs/Twist),
@@ -32,8 +36,6 @@
 #include <ros/ros.h>
 #include <std_msgs/Bool.h>
 #include <std_srvs/Trigger.h>
-#include <tf2/exceptions.h>
-#include <tf2/utils.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -52,6 +54,7 @@
 #include "ekf_slam_core/exploration/frontiers.h"
 #include "ekf_slam_ros/conversions/grid_conversion.h"
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
+#include "ekf_slam_ros/waypoints/robot_pose.h"
 #include "ros_conversions/pose_conversion.h"
 #include "ros_params/param_fields.h"
 
@@ -61,25 +64,31 @@ using ekf_slam::Pose2;
 using ekf_slam::Vector2;
 namespace waypoints = ekf_slam::waypoints;
 
+// A back-off shorter than this (m) frees nothing.
+constexpr double kMinBackoff = 0.05;
+
 volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
 
 struct ExplorerParams {
   std::string global_frame = "map";
   std::string base_frame = "base_link";
-  double rate = 10.0;           // Hz, control loop
-  double tf_timeout = 0.5;      // s: an older pose counts as lost
-  double map_timeout = 15.0;    // s: an older `map` stops the robot
-  double replan_period = 2.0;   // s between checks of the goal and path on the newest map
-  double max_time = 0.0;        // s of exploring before it heads home; 0: no limit
-  double max_distance = 0.0;    // m driven before it heads home; 0: no limit
-  int max_goal_tries = 2;       // arrivals or blockages at one frontier before it is given up
-  double goal_radius = 0.6;     // m: goals this close count as the same
-  double home_tolerance = 0.3;  // m from the start that counts as home
-  bool return_home = true;      // false: stop where exploring ends
+  std::string odom_frame = "odom";  // motion (stuck watch, distance) measured here; empty: global
+  double rate = 10.0;               // Hz, control loop
+  double tf_timeout = 0.5;          // s: an older pose counts as lost
+  double map_timeout = 15.0;        // s: an older `map` stops the robot
+  double replan_period = 2.0;       // s between checks of the goal and path on the newest map
+  double max_time = 0.0;            // s of exploring before it heads home; 0: no limit
+  double max_distance = 0.0;        // m driven before it heads home; 0: no limit
+  int max_goal_tries = 2;           // arrivals or blockages at one frontier before it is given up
+  double goal_radius = 0.6;         // m: goals this close count as the same
+  double home_tolerance = 0.3;      // m from the start that counts as home
+  bool return_home = true;          // false: stop where exploring ends
   std::string save_path =
       "exploration";                   // saved map and state (relative: in ROS_HOME); empty: none
   std::string slam_node = "ekf_slam";  // whose save_map and write_state are called
+  double robot_half_width = 0.25;      // m: half the body's width with a margin, for back-offs
+  double robot_rear = 0.35;            // m from the centre to the rear with a margin, for back-offs
   ekf_slam::ExplorationOptions exploration;
   waypoints::PursuitOptions pursuit;
   waypoints::RecoveryOptions recovery;
@@ -89,6 +98,7 @@ struct ExplorerParams {
     using ekf_slam::Bounds;
     v.text("global_frame", global_frame);
     v.text("base_frame", base_frame);
+    v.text("odom_frame", odom_frame);
     v.number("rate", rate, Bounds::closed(1.0, 100.0, "Hz"));
     v.number("tf_timeout", tf_timeout, Bounds::closed(0.05, 10.0, "s"));
     v.number("map_timeout", map_timeout, Bounds::closed(0.5, 600.0, "s"));
@@ -101,6 +111,8 @@ struct ExplorerParams {
     v.flag("return_home", return_home);
     v.text("save_path", save_path);
     v.text("slam_node", slam_node);
+    v.number("robot_half_width", robot_half_width, Bounds::closed(0.0, 5.0, "m"));
+    v.number("robot_rear", robot_rear, Bounds::closed(0.0, 5.0, "m"));
     exploration.visitFields(v);
     v.number("lookahead", pursuit.lookahead, Bounds::closed(0.05, 5.0, "m"));
     v.number("max_linear_speed", pursuit.max_linear_speed, Bounds::closed(0.01, 1.5, "m/s"));
@@ -119,6 +131,9 @@ bool loadParams(const ros::NodeHandle& private_node, ExplorerParams* params, std
   if (params->global_frame.empty()) read.fail("global_frame", "must not be empty");
   if (params->base_frame.empty() || params->base_frame == params->global_frame) {
     read.fail("base_frame", "must be set and differ from global_frame");
+  }
+  if (params->odom_frame == params->base_frame) {
+    read.fail("odom_frame", "must differ from base_frame");
   }
   read.rejectUnknown();
   *error = read.errors();
@@ -190,14 +205,24 @@ class Explorer {
     }
     // The pose.
     std::string why;
-    std::optional<Pose2> pose = robotPose(now, &why);
+    const std::optional<Pose2> pose = waypoints::lookupRobotPose(
+        tf_buffer_, params_.global_frame, params_.base_frame, now, params_.tf_timeout, &why);
     if (!pose) return hold("pose lost: " + why, now);
+    // The motion as odometry measures it: a correction of the SLAM pose is
+    // neither progress nor distance driven.
+    std::optional<Pose2> odometry = pose;
+    if (!params_.odom_frame.empty() && params_.odom_frame != params_.global_frame) {
+      odometry = waypoints::lookupRobotPose(tf_buffer_, params_.odom_frame, params_.base_frame, now,
+                                            params_.tf_timeout, &why);
+      if (!odometry) return hold("odometry lost: " + why, now);
+    }
     if (!home_) {
       home_ = *pose;
       ROS_INFO("explorer: starting at (%.2f, %.2f) in %s", pose->x, pose->y,
                params_.global_frame.c_str());
     }
-    if (last_pose_) driven_ += (pose->translation() - last_pose_->translation()).norm();
+    if (last_odometry_) driven_ += (odometry->translation() - last_odometry_->translation()).norm();
+    last_odometry_ = *odometry;
     last_pose_ = *pose;
     // The map.
     if (!grid_) {
@@ -233,33 +258,12 @@ class Explorer {
 
     if (needsPlan(now)) plan(*pose, now);
     if (phase_ == Phase::kFinished || phase_ == Phase::kFailed || !pursuit_) return;
-    drive(*pose, now);
+    drive(*pose, *odometry, now);
   }
 
   void stop() { cmd_publisher_.publish(geometry_msgs::Twist()); }
 
  private:
-  std::optional<Pose2> robotPose(const ros::Time& now, std::string* why) {
-    try {
-      const geometry_msgs::TransformStamped t =
-          tf_buffer_.lookupTransform(params_.global_frame, params_.base_frame, ros::Time(0));
-      const double age = (now - t.header.stamp).toSec();
-      if (age > params_.tf_timeout) {
-        char text[200];
-        std::snprintf(
-            text, sizeof(text), "the newest %s -> %s transform is %.2f s old (tf_timeout %.2f s)",
-            params_.global_frame.c_str(), params_.base_frame.c_str(), age, params_.tf_timeout);
-        *why = text;
-        return std::nullopt;
-      }
-      return Pose2(t.transform.translation.x, t.transform.translation.y,
-                   tf2::getYaw(t.transform.rotation));
-    } catch (const tf2::TransformException& e) {
-      *why = "no transform " + params_.global_frame + " -> " + params_.base_frame + ": " + e.what();
-      return std::nullopt;
-    }
-  }
-
   // The robot at rest for `reason`; warned once per reason when `warn`.
   void hold(const std::string& reason, const ros::Time& now, bool warn = true) {
     if (reason != holding_) {
@@ -449,53 +453,67 @@ class Explorer {
     return cornered_ || recovery_.state() == waypoints::RecoveryState::kGaveUp;
   }
 
-  // Whether the map shows free cells behind the robot for a back-off: the
-  // strip robot_radius wide either side, from the robot's centre to
-  // robot_radius + backoff_distance behind it (its rear and the back-off).
-  bool roomBehind(const Pose2& pose) const {
-    if (!grid_view_) return false;
-    const ekf_slam::ExplorationGrid& grid = *grid_view_;
-    const double radius = params_.exploration.robot_radius;
-    const double length = radius + params_.recovery.backoff_distance;
+  // How far (m, up to backoff_distance) the robot can back off on floor
+  // the map shows free: the strip robot_half_width either side, from its
+  // centre to robot_rear behind it and as far again as it backs.
+  double roomBehind(const Pose2& pose) const {
+    if (!grid_view_) return 0.0;
     const Vector2 back(-std::cos(pose.theta), -std::sin(pose.theta));
-    const Vector2 left(-back.y(), back.x());
-    const double step = 0.5 * grid.resolution();
-    for (double s = 0.0; s <= length; s += step) {
-      for (double l = -radius; l <= radius; l += step) {
-        const int cell = grid.cellAt(pose.translation() + s * back + l * left);
-        if (cell < 0 || !grid.free(cell)) return false;
-      }
+    const double step = grid_view_->resolution();
+    double room = 0.0;
+    while (room + step <= params_.recovery.backoff_distance + 1e-9 &&
+           ekf_slam::stripFree(*grid_view_, pose.translation(),
+                               pose.translation() + (params_.robot_rear + room + step) * back,
+                               params_.robot_half_width)) {
+      room += step;
     }
-    return true;
+    return room;
   }
 
-  void drive(const Pose2& pose, const ros::Time& now) {
+  // One control step: the pursuit on the map pose, the recovery watching
+  // the odometry.
+  void drive(const Pose2& pose, const Pose2& odometry, const ros::Time& now) {
     const double dt = std::max(0.0, (now - last_update_).toSec());
     last_update_ = now;
     const waypoints::VelocityCommand wanted = pursuit_->update(pose, dt);
     if (pursuit_->done() && !reached_) reached_ = now;
     const waypoints::RecoveryState before = recovery_.state();
     const waypoints::VelocityCommand command =
-        recovery_.update(pose, now.toSec(), wanted, pursuit_->remaining());
+        recovery_.update(odometry, now.toSec(), wanted, pursuit_->remaining());
     if (recovery_.state() != before) {
-      if (recovery_.state() == waypoints::RecoveryState::kBackingOff && !roomBehind(pose)) {
-        // The laser does not see behind the robot: a back-off into what the
-        // map shows occupied or does not know would touch it.
-        ROS_WARN(
-            "explorer: blocked at (%.2f, %.2f): no progress for %.1f s, and the map shows no "
-            "room to back off %.2f m; this path is given up",
-            pose.x, pose.y, params_.recovery.stuck_time, params_.recovery.backoff_distance);
-        cornered_ = true;
-        stop();
-        return;
-      }
-      if (recovery_.state() == waypoints::RecoveryState::kBackingOff) {
-        ROS_WARN(
-            "explorer: blocked at (%.2f, %.2f): no progress for %.1f s; backing off (%d of %d)",
-            pose.x, pose.y, params_.recovery.stuck_time, recovery_.backoffs(),
-            params_.recovery.max_backoffs);
-      } else if (recovery_.state() == waypoints::RecoveryState::kDriving) {
-        pursuit_->resetCommand();
+      switch (recovery_.state()) {
+        case waypoints::RecoveryState::kBackingOff: {
+          // The laser does not see behind the robot: a back-off into what
+          // the map shows occupied or does not know would touch it.
+          const double room = roomBehind(pose);
+          if (room < kMinBackoff) {
+            ROS_WARN(
+                "explorer: blocked at (%.2f, %.2f): held back for %.1f s, and the map shows no "
+                "room to back off; this path is given up",
+                pose.x, pose.y, params_.recovery.stuck_time);
+            cornered_ = true;
+            stop();
+            return;
+          }
+          recovery_.limitBackoff(room);
+          ROS_WARN(
+              "explorer: blocked at (%.2f, %.2f): held back for %.1f s; backing off %.2f m (%d "
+              "of %d)",
+              pose.x, pose.y, params_.recovery.stuck_time, room, recovery_.backoffs(),
+              params_.recovery.max_backoffs);
+          break;
+        }
+        case waypoints::RecoveryState::kTurningAround:
+          ROS_WARN(
+              "explorer: blocked at (%.2f, %.2f) turning on the spot for %.1f s: turning the "
+              "other way round",
+              pose.x, pose.y, params_.recovery.stuck_time);
+          break;
+        case waypoints::RecoveryState::kDriving:
+          pursuit_->resetCommand();
+          break;
+        case waypoints::RecoveryState::kGaveUp:
+          break;
       }
     }
     geometry_msgs::Twist twist;
@@ -714,7 +732,7 @@ class Explorer {
   std::string holding_;            // why the robot is held at rest, empty while driving
   std::string end_reason_;         // why exploring ended
   std::string saved_;
-  std::optional<Pose2> home_, last_pose_;
+  std::optional<Pose2> home_, last_pose_, last_odometry_;
   std::optional<Vector2> goal_;
   std::optional<ros::Time> reached_;  // when the pursuit reached the end of its path
   std::vector<Vector2> path_;

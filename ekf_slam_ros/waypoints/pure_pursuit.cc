@@ -131,8 +131,44 @@ VelocityCommand PurePursuit::update(const Pose2& pose, double dt) {
   return last_;
 }
 
+void BlockageRecovery::watch(const Pose2& pose, double now) {
+  watching_ = true;
+  steps_.clear();
+  made_ = asked_ = 0.0;
+  watch_start_ = last_time_ = now;
+  last_pose_ = pose;
+}
+
+bool BlockageRecovery::heldBack(const Pose2& pose, double now) {
+  const double dt = std::max(0.0, now - last_time_);
+  Step step{now, 0.0, 0.0};
+  step.made = (pose.translation() - last_pose_.translation()).norm() / options_.stuck_distance +
+              std::abs(wrapAngle(pose.theta - last_pose_.theta)) / options_.stuck_angle;
+  step.asked = std::abs(last_command_.linear) * dt / options_.stuck_distance +
+               std::abs(last_command_.angular) * dt / options_.stuck_angle;
+  steps_.push_back(step);
+  made_ += step.made;
+  asked_ += step.asked;
+  while (!steps_.empty() && steps_.front().time <= now - options_.stuck_time) {
+    made_ -= steps_.front().made;
+    asked_ -= steps_.front().asked;
+    steps_.pop_front();
+  }
+  last_pose_ = pose;
+  last_time_ = now;
+  if (now - watch_start_ < options_.stuck_time) return false;
+  // At least one unit of motion, as much as a slow robot makes.
+  return made_ < std::max(1.0, options_.stuck_fraction * asked_);
+}
+
 VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
                                          const VelocityCommand& pursuit, double remaining) {
+  last_command_ = step(pose, now, pursuit, remaining);
+  return last_command_;
+}
+
+VelocityCommand BlockageRecovery::step(const Pose2& pose, double now,
+                                       const VelocityCommand& pursuit, double remaining) {
   const VelocityCommand rest;
   if (state_ == RecoveryState::kGaveUp) return rest;
   if (state_ == RecoveryState::kBackingOff) {
@@ -140,35 +176,61 @@ VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
     // should take (something behind it as well).
     const double backed = (pose.translation() - backoff_start_.translation()).norm();
     const double allowed = 3.0 * options_.backoff_distance / options_.backoff_speed;
-    if (backed < options_.backoff_distance && now - backoff_time_ < allowed) return reverse();
+    if (backed < backoff_length_ && now - backoff_time_ < allowed) return reverse();
     state_ = RecoveryState::kDriving;
     watching_ = false;
     return rest;  // the pursuit starts again from rest
   }
-  if (backoffs_ > 0 && remaining < remaining_at_backoff_ - options_.progress_distance) {
+  if (state_ == RecoveryState::kTurningAround) {
+    // Until the pursuit drives on, or turns this way itself (its target
+    // came round to this side), or stops.
+    if (pursuit.linear != 0.0 || pursuit.angular * turn_sign_ >= 0.0) {
+      state_ = RecoveryState::kDriving;
+      watching_ = false;
+      return rest;
+    }
+    if (!heldBack(pose, now)) return turn();
+    return blocked(pose, now, pursuit, remaining);  // this way is blocked as well
+  }
+  if ((backoffs_ > 0 || turned_around_) &&
+      remaining < remaining_at_backoff_ - options_.progress_distance) {
     backoffs_ = 0;
+    turned_around_ = false;
   }
   const bool commanded = pursuit.linear != 0.0 || pursuit.angular != 0.0;
-  const bool moved =
-      watching_ && ((pose.translation() - anchor_.translation()).norm() > options_.stuck_distance ||
-                    std::abs(wrapAngle(pose.theta - anchor_.theta)) > options_.stuck_angle);
-  if (options_.stuck_time <= 0.0 || !commanded || !watching_ || moved) {
-    watching_ = commanded;
-    anchor_ = pose;
-    anchor_time_ = now;
+  if (options_.stuck_time <= 0.0 || !commanded) {
+    watching_ = false;
     return pursuit;
   }
-  if (now - anchor_time_ < options_.stuck_time) return pursuit;
+  if (!watching_) {
+    watch(pose, now);
+    return pursuit;
+  }
+  if (!heldBack(pose, now)) return pursuit;
+  return blocked(pose, now, pursuit, remaining);
+}
+
+VelocityCommand BlockageRecovery::blocked(const Pose2& pose, double now,
+                                          const VelocityCommand& pursuit, double remaining) {
+  remaining_at_backoff_ = remaining;
+  if (state_ == RecoveryState::kDriving && !turned_around_ && pursuit.linear == 0.0 &&
+      pursuit.angular != 0.0) {
+    turned_around_ = true;
+    turn_sign_ = pursuit.angular > 0.0 ? -1.0 : 1.0;
+    state_ = RecoveryState::kTurningAround;
+    watch(pose, now);
+    return turn();
+  }
   watching_ = false;
   if (backoffs_ >= options_.max_backoffs) {
     state_ = RecoveryState::kGaveUp;
-    return rest;
+    return VelocityCommand{};
   }
   ++backoffs_;
-  remaining_at_backoff_ = remaining;
   state_ = RecoveryState::kBackingOff;
   backoff_start_ = pose;
   backoff_time_ = now;
+  backoff_length_ = options_.backoff_distance;
   return reverse();
 }
 

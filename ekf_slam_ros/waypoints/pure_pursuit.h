@@ -13,6 +13,8 @@
 // of a lap, after an overshoot), the robot turns on the spot first.
 #pragma once
 
+#include <algorithm>
+#include <deque>
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
@@ -88,35 +90,50 @@ class PurePursuit {
 // map a little off, or the robot off its line), or wheels that stall. The
 // pursuit alone would keep asking for the same blocked motion for ever.
 // Blocked means: every command over the last stuck_time seconds asked for
-// motion, and the robot moved less than stuck_distance and turned less than
-// stuck_angle in that time. The robot then backs off backoff_distance
-// slowly (the P3-DX's rear bumpers, not the laser, watch behind it) and
-// the pursuit starts again from rest, meeting the path at another angle.
+// motion, and the robot made less than stuck_fraction of the motion it was
+// told to make (distance and turn, each measured in units of
+// stuck_distance and stuck_angle, the least that counts): a gate that holds
+// the robot and lets it creep now and then does not hide the blockage.
+// The pose given is the odometry's: a SLAM correction is no motion.
+// - Blocked in a turn on the spot (a corner of the footprint would come too
+//   near an obstacle), the robot first turns the other way round, at
+//   turn_speed, until the pursuit's target is on that side or ahead: the
+//   gate may allow the turn that swings the corner away. Once per
+//   progress_distance of path.
+// - Otherwise, or blocked in that turn too, it backs off backoff_distance
+//   slowly (the P3-DX's rear bumpers, not the laser, watch behind it) and
+//   the pursuit starts again from rest, meeting the path at another angle.
 // After max_backoffs back-offs with less than progress_distance of path
 // covered in between, it gives up: the robot stays at rest.
 struct RecoveryOptions {
   double stuck_time = 8.0;         // s; 0: never judged blocked
   double stuck_distance = 0.05;    // m
   double stuck_angle = 0.1;        // rad
+  double stuck_fraction = 0.25;    // of the commanded motion, below which the robot is blocked
   double backoff_distance = 0.3;   // m
   double backoff_speed = 0.1;      // m/s
+  double turn_speed = 0.5;         // rad/s, turning the other way round
   int max_backoffs = 3;            // in a row, without progress in between
   double progress_distance = 1.0;  // m of path that count as progress
 };
 
-enum class RecoveryState { kDriving, kBackingOff, kGaveUp };
+enum class RecoveryState { kDriving, kTurningAround, kBackingOff, kGaveUp };
 
 class BlockageRecovery {
  public:
   explicit BlockageRecovery(RecoveryOptions options) : options_(options) {}
   // One control step at time `now` (s): the robot's pose, the pursuit's
   // command for it and the path it has left (PurePursuit::remaining).
-  // Returns the command to send: the pursuit's while driving, a slow
-  // reverse while backing off, zero once it gave up.
+  // Returns the command to send: the pursuit's while driving, a slow turn
+  // while turning around, a slow reverse while backing off, zero once it
+  // gave up.
   VelocityCommand update(const Pose2& pose, double now, const VelocityCommand& pursuit,
                          double remaining);
   // The pose was lost or the robot stopped from outside: judge afresh.
   void restartWatch() { watching_ = false; }
+  // The current back-off ends after `distance` (m) if that is shorter than
+  // backoff_distance (the floor known free behind the robot ends there).
+  void limitBackoff(double distance) { backoff_length_ = std::min(backoff_length_, distance); }
   RecoveryState state() const { return state_; }
   // Back-offs since the path last made progress_distance of progress.
   int backoffs() const { return backoffs_; }
@@ -128,16 +145,47 @@ class BlockageRecovery {
     command.linear = -options_.backoff_speed;
     return command;
   }
+  VelocityCommand turn() const {
+    VelocityCommand command;
+    command.angular = turn_sign_ * options_.turn_speed;
+    return command;
+  }
+  // update() but for remembering the command returned.
+  VelocityCommand step(const Pose2& pose, double now, const VelocityCommand& pursuit,
+                       double remaining);
+  // Starts watching afresh at `pose`.
+  void watch(const Pose2& pose, double now);
+  // Adds the step to `pose` at `now`: the motion made, and the motion the
+  // previous step's command asked for; drops the steps older than
+  // stuck_time. Returns whether the robot is blocked: watched for
+  // stuck_time, and the motion made in it is short of stuck_fraction of the
+  // motion asked for.
+  bool heldBack(const Pose2& pose, double now);
+  // Blocked: the next recovery step (turn around, back off or give up).
+  VelocityCommand blocked(const Pose2& pose, double now, const VelocityCommand& pursuit,
+                          double remaining);
 
   RecoveryOptions options_;
   RecoveryState state_ = RecoveryState::kDriving;
   bool watching_ = false;
-  Pose2 anchor_;              // where the robot was when the watch (re)started …
-  double anchor_time_ = 0.0;  // … and when
+  // The watch: per step its time, the motion made and the motion asked
+  // for, in units of stuck_distance plus units of stuck_angle.
+  struct Step {
+    double time, made, asked;
+  };
+  std::deque<Step> steps_;
+  double made_ = 0.0, asked_ = 0.0;  // summed over steps_
+  double watch_start_ = 0.0;
+  Pose2 last_pose_;  // at the previous step
+  double last_time_ = 0.0;
+  VelocityCommand last_command_;  // returned at the previous step
+  double backoff_length_ = 0.0;   // of the current back-off
   Pose2 backoff_start_;
   double backoff_time_ = 0.0;
   int backoffs_ = 0;
-  double remaining_at_backoff_ = 0.0;
+  bool turned_around_ = false;  // since the last progress_distance of path
+  double turn_sign_ = 1.0;
+  double remaining_at_backoff_ = 0.0;  // at the last recovery step
 };
 
 }  // namespace waypoints

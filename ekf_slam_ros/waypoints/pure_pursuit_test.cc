@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace ekf_slam {
 namespace waypoints {
@@ -220,6 +221,63 @@ TEST(BlockageRecoveryTest, BacksOffFromABlockedPathAndGivesUpAfterTheLastTry) {
   // Each try: blocked for stuck_time, 3 s backing off, and the drive back.
   EXPECT_GT(gave_up_at, (options.max_backoffs + 1) * options.stuck_time);
   EXPECT_LT(gave_up_at, 80.0);
+}
+
+// The path's first point lies behind the robot on its right: the pursuit
+// turns clockwise on the spot, which the safety gate refuses there (an
+// obstacle by the footprint's corner). The recovery turns the robot the
+// other way round, the long way, until the target is on that side; then
+// the pursuit drives the path, with no back-off.
+TEST(BlockageRecoveryTest, ATurnBlockedOneWayIsMadeTheOtherWayRound) {
+  RecoveryOptions options;
+  PurePursuit pursuit({{0, 0}, {-0.5, -1.5}, {-0.5, -4}}, PursuitOptions());
+  BlockageRecovery recovery(options);
+  const double dt = 0.05;
+  Pose2 pose;
+  double turned_around_at = -1.0;
+  for (int i = 0; i < 4000 && !pursuit.done(); ++i) {
+    const double now = i * dt;
+    const VelocityCommand wanted = pursuit.update(pose, dt);
+    const RecoveryState before = recovery.state();
+    const VelocityCommand command = recovery.update(pose, now, wanted, pursuit.remaining());
+    ASSERT_NE(recovery.state(), RecoveryState::kBackingOff) << "at " << now << " s";
+    if (recovery.state() == RecoveryState::kTurningAround) {
+      if (turned_around_at < 0.0) turned_around_at = now;
+      EXPECT_EQ(command.linear, 0.0);
+      EXPECT_EQ(command.angular, options.turn_speed);  // anticlockwise
+    }
+    if (before != RecoveryState::kDriving && recovery.state() == RecoveryState::kDriving) {
+      pursuit.resetCommand();
+    }
+    VelocityCommand allowed = command;
+    const bool clockwise_on_the_spot = command.linear == 0.0 && command.angular < 0.0;
+    if (pose.translation().norm() < 0.05 && clockwise_on_the_spot) allowed = VelocityCommand();
+    pose = drive(pose, allowed, dt);
+  }
+  EXPECT_NEAR(turned_around_at, options.stuck_time, 0.2);
+  EXPECT_TRUE(pursuit.done());
+  EXPECT_EQ(recovery.backoffs(), 0);
+}
+
+// Blocked in a turn on the spot either way: the recovery turns the other
+// way round, is blocked there too, and backs off.
+TEST(BlockageRecoveryTest, ATurnBlockedBothWaysEndsInABackOff) {
+  RecoveryOptions options;
+  PurePursuit pursuit({{0, 0}, {-0.5, -1.5}, {-0.5, -4}}, PursuitOptions());
+  BlockageRecovery recovery(options);
+  const double dt = 0.05;
+  Pose2 pose;
+  std::vector<RecoveryState> states{RecoveryState::kDriving};
+  for (int i = 0; i < 1000 && recovery.state() != RecoveryState::kBackingOff; ++i) {
+    const VelocityCommand wanted = pursuit.update(pose, dt);
+    recovery.update(pose, i * dt, wanted, pursuit.remaining());
+    if (recovery.state() != states.back()) states.push_back(recovery.state());
+    // The robot does not move: the gate holds every turn.
+  }
+  EXPECT_EQ(states,
+            (std::vector<RecoveryState>{RecoveryState::kDriving, RecoveryState::kTurningAround,
+                                        RecoveryState::kBackingOff}));
+  EXPECT_EQ(recovery.backoffs(), 1);
 }
 
 // A robot that drives, or turns on the spot, or waits at rest is never

@@ -8,24 +8,24 @@
 // done, when it shuts down, and whenever the pose is lost (no transform, or
 // one older than tf_timeout); it resumes when the pose returns. A robot that
 // does not move while it is told to (the safety gate holding it at an
-// obstacle) backs off and tries again, and gives up after max_backoffs
-// tries (BlockageRecovery in pure_pursuit.h); ~done then stays false.
+// obstacle; judged on the odometry, odom_frame -> base_frame) backs off and tries again, and gives
+// up after max_backoffs tries (BlockageRecovery in pure_pursuit.h); ~done then stays false.
 // Parameters: docs/simulation.md, "`waypoint_driver`".
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <std_msgs/Bool.h>
-#include <tf2/exceptions.h>
-#include <tf2/utils.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ekf_slam_ros/waypoints/pure_pursuit.h"
+#include "ekf_slam_ros/waypoints/robot_pose.h"
 #include "ekf_slam_ros/waypoints/waypoint_file.h"
 #include "ros_conversions/pose_conversion.h"
 #include "ros_params/private_params.h"
@@ -43,9 +43,10 @@ struct DriverParams {
   std::string waypoints_file;
   std::string global_frame = "map";
   std::string base_frame = "base_link";
-  int laps = 1;             // times a closed loop is driven
-  double rate = 20.0;       // Hz, control loop
-  double tf_timeout = 0.5;  // s, an older pose counts as lost
+  std::string odom_frame = "odom";  // the recovery watches the motion here; empty: global_frame
+  int laps = 1;                     // times a closed loop is driven
+  double rate = 20.0;               // Hz, control loop
+  double tf_timeout = 0.5;          // s, an older pose counts as lost
   waypoints::PursuitOptions pursuit;
   waypoints::RecoveryOptions recovery;
 };
@@ -55,6 +56,7 @@ bool loadParams(const ros::NodeHandle& private_node, DriverParams* params, std::
   load.text("waypoints_file", &params->waypoints_file);
   load.text("global_frame", &params->global_frame);
   load.text("base_frame", &params->base_frame);
+  load.text("odom_frame", &params->odom_frame);
   load.integer("laps", &params->laps, 1, 1000);
   load.number("rate", &params->rate, 1.0, 200.0);
   load.number("tf_timeout", &params->tf_timeout, 0.05, 10.0);
@@ -70,12 +72,17 @@ bool loadParams(const ros::NodeHandle& private_node, DriverParams* params, std::
   load.number("stuck_time", &r.stuck_time, 0.0, 600.0);
   load.number("stuck_distance", &r.stuck_distance, 0.001, 1.0);
   load.number("stuck_angle", &r.stuck_angle, 0.001, 1.0);
+  load.number("stuck_fraction", &r.stuck_fraction, 0.0, 1.0);
   load.number("backoff_distance", &r.backoff_distance, 0.0, 2.0);
   load.number("backoff_speed", &r.backoff_speed, 0.01, 0.5);
+  load.number("turn_speed", &r.turn_speed, 0.01, 3.0);
   load.integer("max_backoffs", &r.max_backoffs, 0, 100);
   load.number("progress_distance", &r.progress_distance, 0.0, 100.0);
   if (params->global_frame == params->base_frame) {
     load.fail("base_frame", "must differ from global_frame (" + params->global_frame + ")");
+  }
+  if (params->odom_frame == params->base_frame) {
+    load.fail("odom_frame", "must differ from base_frame (" + params->base_frame + ")");
   }
   load.rejectUnknown();
   *error = load.errors();
@@ -138,27 +145,18 @@ int main(int argc, char** argv) {
   while (!g_stop && ros::ok()) {
     ros::spinOnce();
     const ros::Time now = ros::Time::now();
-    // The robot pose: the newest transform, refused when too old.
-    Pose2 pose;
+    // The robot pose: the newest transform, refused when too old; and the
+    // odometry's, on which the recovery watches whether the robot moves (a
+    // correction of the SLAM pose is no motion).
     std::string why_lost;
-    try {
-      const geometry_msgs::TransformStamped transform =
-          tf_buffer.lookupTransform(params.global_frame, params.base_frame, ros::Time(0));
-      const double age = (now - transform.header.stamp).toSec();
-      pose = Pose2(transform.transform.translation.x, transform.transform.translation.y,
-                   tf2::getYaw(transform.transform.rotation));
-      if (age > params.tf_timeout) {
-        char text[256];
-        std::snprintf(
-            text, sizeof(text), "the newest %s -> %s transform is %.2f s old (tf_timeout %.2f s)",
-            params.global_frame.c_str(), params.base_frame.c_str(), age, params.tf_timeout);
-        why_lost = text;
-      }
-    } catch (const tf2::TransformException& exception) {
-      why_lost = "no transform " + params.global_frame + " -> " + params.base_frame + ": " +
-                 exception.what();
+    std::optional<Pose2> pose = waypoints::lookupRobotPose(
+        tf_buffer, params.global_frame, params.base_frame, now, params.tf_timeout, &why_lost);
+    std::optional<Pose2> odometry = pose;
+    if (pose && !params.odom_frame.empty() && params.odom_frame != params.global_frame) {
+      odometry = waypoints::lookupRobotPose(tf_buffer, params.odom_frame, params.base_frame, now,
+                                            params.tf_timeout, &why_lost);
     }
-    if (!why_lost.empty()) {
+    if (!pose || !odometry) {
       if (!pose_lost && pursuit) {
         ROS_WARN("waypoint_driver: robot stopped, pose lost: %s", why_lost.c_str());
         cmd_publisher.publish(geometry_msgs::Twist());
@@ -177,35 +175,41 @@ int main(int argc, char** argv) {
 
     if (!pursuit) {
       // The path starts where the robot is.
-      std::vector<Vector2> path{pose.translation()};
+      std::vector<Vector2> path{pose->translation()};
       path.insert(path.end(), laps.begin(), laps.end());
       pursuit = std::make_unique<waypoints::PurePursuit>(path, params.pursuit);
       std_msgs::Header header;
       header.stamp = now;
       header.frame_id = params.global_frame;
       path_publisher.publish(ekf_slam::ros_conversions::toPathMessage(path, header));
-      ROS_INFO("waypoint_driver: starting at (%.2f, %.2f) in %s, %.1f m to drive", pose.x, pose.y,
+      ROS_INFO("waypoint_driver: starting at (%.2f, %.2f) in %s, %.1f m to drive", pose->x, pose->y,
                params.global_frame.c_str(), pursuit->remaining());
       last_update = now;
     }
     const double dt = std::max(0.0, (now - last_update).toSec());
     last_update = now;
-    const waypoints::VelocityCommand wanted = pursuit->update(pose, dt);
+    const waypoints::VelocityCommand wanted = pursuit->update(*pose, dt);
     const waypoints::RecoveryState before = recovery.state();
     const waypoints::VelocityCommand command =
-        recovery.update(pose, now.toSec(), wanted, pursuit->remaining());
+        recovery.update(*odometry, now.toSec(), wanted, pursuit->remaining());
     if (recovery.state() != before) {
       switch (recovery.state()) {
+        case waypoints::RecoveryState::kTurningAround:
+          ROS_WARN(
+              "waypoint_driver: blocked at (%.2f, %.2f) in %s turning on the spot for %.1f s: "
+              "turning the other way round",
+              pose->x, pose->y, params.global_frame.c_str(), params.recovery.stuck_time);
+          break;
         case waypoints::RecoveryState::kBackingOff:
           ROS_WARN(
               "waypoint_driver: blocked at (%.2f, %.2f) in %s: no progress for %.1f s although "
               "motion was commanded (the safety gate holding the robot at an obstacle, or a "
               "stall); backing off %.2f m and trying again (%d of %d)",
-              pose.x, pose.y, params.global_frame.c_str(), params.recovery.stuck_time,
+              pose->x, pose->y, params.global_frame.c_str(), params.recovery.stuck_time,
               params.recovery.backoff_distance, recovery.backoffs(), params.recovery.max_backoffs);
           break;
         case waypoints::RecoveryState::kDriving:
-          ROS_INFO("waypoint_driver: backed off to (%.2f, %.2f), driving on", pose.x, pose.y);
+          ROS_INFO("waypoint_driver: backed off to (%.2f, %.2f), driving on", pose->x, pose->y);
           pursuit->resetCommand();
           break;
         case waypoints::RecoveryState::kGaveUp:
@@ -213,7 +217,7 @@ int main(int argc, char** argv) {
               "waypoint_driver: blocked at (%.2f, %.2f) in %s after %d back-offs; giving up with "
               "%.1f m of the path left. The robot stays at rest and ~done stays false; check "
               "the path's clearance from obstacles (safety gate log) and the pose",
-              pose.x, pose.y, params.global_frame.c_str(), recovery.backoffs(),
+              pose->x, pose->y, params.global_frame.c_str(), recovery.backoffs(),
               pursuit->remaining());
           break;
       }
@@ -223,8 +227,8 @@ int main(int argc, char** argv) {
       finished = true;
       done.data = true;
       done_publisher.publish(done);
-      ROS_INFO("waypoint_driver: done: last waypoint reached at (%.2f, %.2f) in %s", pose.x, pose.y,
-               params.global_frame.c_str());
+      ROS_INFO("waypoint_driver: done: last waypoint reached at (%.2f, %.2f) in %s", pose->x,
+               pose->y, params.global_frame.c_str());
     }
     rate.sleep();
   }
