@@ -140,7 +140,9 @@ void BlockageRecovery::watch(const Pose2& pose, double now) {
 }
 
 bool BlockageRecovery::heldBack(const Pose2& pose, double now) {
-  const double dt = std::max(0.0, now - last_time_);
+  // A command counts for at most a second (the P3-DX driver's command
+  // timeout stops the robot sooner): a long gap between calls asks for nothing.
+  const double dt = std::clamp(now - last_time_, 0.0, 1.0);
   Step step{now, 0.0, 0.0};
   step.made = (pose.translation() - last_pose_.translation()).norm() / options_.stuck_distance +
               std::abs(wrapAngle(pose.theta - last_pose_.theta)) / options_.stuck_angle;
@@ -157,8 +159,10 @@ bool BlockageRecovery::heldBack(const Pose2& pose, double now) {
   last_pose_ = pose;
   last_time_ = now;
   if (now - watch_start_ < options_.stuck_time) return false;
-  // At least one unit of motion, as much as a slow robot makes.
-  return made_ < std::max(1.0, options_.stuck_fraction * asked_);
+  // Asked for enough that its share is at least one unit (a robot at rest,
+  // or told to wait, is not blocked), and short of that share.
+  const double share = options_.stuck_fraction * asked_;
+  return share >= 1.0 && made_ < share;
 }
 
 VelocityCommand BlockageRecovery::update(const Pose2& pose, double now,
@@ -197,11 +201,7 @@ VelocityCommand BlockageRecovery::step(const Pose2& pose, double now,
     backoffs_ = 0;
     turned_around_ = false;
   }
-  const bool commanded = pursuit.linear != 0.0 || pursuit.angular != 0.0;
-  if (options_.stuck_time <= 0.0 || !commanded) {
-    watching_ = false;
-    return pursuit;
-  }
+  if (options_.stuck_time <= 0.0) return pursuit;
   if (!watching_) {
     watch(pose, now);
     return pursuit;

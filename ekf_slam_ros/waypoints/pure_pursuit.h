@@ -89,12 +89,14 @@ class PurePursuit {
 // back every forward command at an obstacle the path passes too near (the
 // map a little off, or the robot off its line), or wheels that stall. The
 // pursuit alone would keep asking for the same blocked motion for ever.
-// Blocked means: every command over the last stuck_time seconds asked for
-// motion, and the robot made less than stuck_fraction of the motion it was
-// told to make (distance and turn, each measured in units of
-// stuck_distance and stuck_angle, the least that counts): a gate that holds
-// the robot and lets it creep now and then does not hide the blockage.
-// The pose given is the odometry's: a SLAM correction is no motion.
+// Blocked means: over the last stuck_time seconds the robot made less than
+// stuck_fraction of the motion it was told to make, and that fraction is
+// at least one unit (distance and turn are counted in units of
+// stuck_distance and stuck_angle): a gate that holds the robot and lets it
+// creep now and then does not hide the blockage, nor does a pause in the
+// commands (a new path starting from rest); a robot told to wait is not
+// blocked. The pose given is the odometry's: a SLAM correction is no
+// motion.
 // - Blocked in a turn on the spot (a corner of the footprint would come too
 //   near an obstacle), the robot first turns the other way round, at
 //   turn_speed, until the pursuit's target is on that side or ahead: the

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -280,6 +281,30 @@ TEST(BlockageRecoveryTest, ATurnBlockedBothWaysEndsInABackOff) {
   EXPECT_EQ(recovery.backoffs(), 1);
 }
 
+// Held at an obstacle, the gate lets the robot creep a little now and then
+// (it turns by 0.03 rad every second), and a new path every 5 s starts the
+// pursuit from rest: the robot is still found blocked.
+TEST(BlockageRecoveryTest, CreepingAndRestartsDoNotHideABlockage) {
+  RecoveryOptions options;
+  BlockageRecovery recovery(options);
+  const double dt = 0.1;
+  Pose2 pose;
+  std::unique_ptr<PurePursuit> pursuit;
+  double blocked_at = -1.0;
+  for (int i = 0; i < 600 && blocked_at < 0.0; ++i) {
+    const double now = i * dt;
+    if (i % 50 == 0)
+      pursuit =
+          std::make_unique<PurePursuit>(std::vector<Vector2>{{0, 0}, {3, 1}}, PursuitOptions());
+    const VelocityCommand wanted = pursuit->update(pose, i % 50 == 0 ? 0.0 : dt);
+    recovery.update(pose, now, wanted, pursuit->remaining());
+    if (recovery.state() != RecoveryState::kDriving) blocked_at = now;
+    if (i % 10 == 0) pose.theta += 0.03;  // the creep
+  }
+  EXPECT_GE(blocked_at, options.stuck_time);
+  EXPECT_LT(blocked_at, options.stuck_time + 1.0);
+}
+
 // A robot that drives, or turns on the spot, or waits at rest is never
 // judged blocked, and gets the pursuit's command unchanged.
 TEST(BlockageRecoveryTest, ARobotThatMovesOrIsToldToWaitIsNotBlocked) {
@@ -289,9 +314,10 @@ TEST(BlockageRecoveryTest, ARobotThatMovesOrIsToldToWaitIsNotBlocked) {
   BlockageRecovery recovery{RecoveryOptions()};
   const double dt = 0.05;
   Pose2 pose(0.0, 0.0, 0.0);
-  for (int i = 0; i < 4000 && !pursuit.done(); ++i) {
+  double now = 0.0;
+  for (int i = 0; i < 4000 && !pursuit.done(); ++i, now += dt) {
     const VelocityCommand wanted = pursuit.update(pose, dt);
-    const VelocityCommand command = recovery.update(pose, i * dt, wanted, pursuit.remaining());
+    const VelocityCommand command = recovery.update(pose, now, wanted, pursuit.remaining());
     ASSERT_EQ(recovery.state(), RecoveryState::kDriving) << "at step " << i;
     EXPECT_EQ(command.linear, wanted.linear);
     EXPECT_EQ(command.angular, wanted.angular);
@@ -299,8 +325,8 @@ TEST(BlockageRecoveryTest, ARobotThatMovesOrIsToldToWaitIsNotBlocked) {
   }
   EXPECT_TRUE(pursuit.done());
   // Standing still for a minute with nothing asked of it.
-  for (int i = 0; i < 1200; ++i) {
-    recovery.update(pose, 1000.0 + i * dt, VelocityCommand(), pursuit.remaining());
+  for (int i = 0; i < 1200; ++i, now += dt) {
+    recovery.update(pose, now, VelocityCommand(), pursuit.remaining());
   }
   EXPECT_EQ(recovery.state(), RecoveryState::kDriving);
   EXPECT_EQ(recovery.backoffs(), 0);
