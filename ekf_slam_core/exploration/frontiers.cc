@@ -87,11 +87,19 @@ ExplorationGrid::ExplorationGrid(const GridMapFile& grid, const ExplorationOptio
   }
   // Clearance from every known, non-free cell, as far as the wall cost and
   // the goals' clearance need it.
-  const double reach_m = std::max(options.wall_clearance, options.goal_clearance);
+  const double reach_m =
+      std::max({options.wall_clearance, options.goal_clearance, options.frontier_clearance});
   if (reach_m <= 0.0) return;
   clearance_ = distanceFrom(
       width_, height_, [this](int c) { return !unknown(c) && !free(c); }, reach_m / resolution_);
   for (double& d : clearance_) d *= resolution_;
+  // The goals' clearance counts the unknown as well: a wall not yet seen
+  // (behind furniture) may be there.
+  if (options.goal_clearance > 0.0) {
+    open_clearance_ = distanceFrom(
+        width_, height_, [this](int c) { return !free(c); }, options.goal_clearance / resolution_);
+    for (double& d : open_clearance_) d *= resolution_;
+  }
   if (options.wall_clearance <= 0.0 ||
       (options.wall_penalty <= 0.0 && options.narrow_penalty <= 1.0)) {
     return;
@@ -265,7 +273,7 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
                                     const ExplorationOptions& options) {
   const int w = grid.width(), h = grid.height();
   auto isFrontier = [&](int c) {
-    if (!grid.free(c)) return false;
+    if (!grid.free(c) || grid.clearance(c) < options.frontier_clearance) return false;
     const int x = c % w, y = c / w;
     for (int k = 0; k < 4; ++k) {
       const int nx = x + kDx[k], ny = y + kDy[k];
@@ -297,8 +305,10 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
     }
     return steps;
   };
+  // Goals up to twice goal_clearance from the frontier: as far from the
+  // unknown as from the walls.
   const int search =
-      std::max(1, static_cast<int>(std::ceil(options.goal_clearance / grid.resolution())));
+      std::max(1, static_cast<int>(std::ceil(2.0 * options.goal_clearance / grid.resolution())));
   const int piece_cells =
       std::max(1, static_cast<int>(std::round(options.max_frontier_length / grid.resolution())));
   std::vector<Frontier> out;
@@ -335,10 +345,10 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
       if (f.cells.empty() || (pieces > 1 && f.length < options.min_frontier_length)) continue;
       for (int cell : f.cells) f.centroid += grid.centre(cell);
       f.centroid /= static_cast<double>(f.cells.size());
-      // The goal: the reachable cell with goal_clearance, among the piece's
-      // cells and those within goal_clearance of them (a frontier cell may
-      // lie inside the inflation, or too near a wall to turn), nearest its
-      // centroid.
+      // The goal: the reachable cell with goal_clearance from walls and
+      // from the unknown, among the piece's cells and those within twice
+      // goal_clearance of them (a frontier cell may lie inside the
+      // inflation, or too near a wall to turn), nearest its centroid.
       double best = kInfinity;
       f.distance = kInfinity;
       for (int cell : f.cells) {
@@ -350,7 +360,7 @@ std::vector<Frontier> findFrontiers(const ExplorationGrid& grid, const Reach& re
               continue;
             }
             const int n = ny * w + nx;
-            if (!reach.reachable(n) || grid.clearance(n) < options.goal_clearance) continue;
+            if (!reach.reachable(n) || grid.openClearance(n) < options.goal_clearance) continue;
             const double d = (grid.centre(n) - f.centroid).squaredNorm();
             if (d < best || (d == best && reach.distance[n] < f.distance)) {
               best = d;
@@ -443,7 +453,8 @@ std::vector<int> segmentRooms(const ExplorationGrid& grid, double door_width) {
 
 ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
                                 const RoomOf& room_of, const Excluded& excluded,
-                                const ExplorationOptions& options) {
+                                const ExplorationOptions& options,
+                                const std::optional<Vector2>& current, double same_goal) {
   ExplorationPlan plan;
   plan.reach = reachFrom(grid, robot);
   plan.frontiers = findFrontiers(grid, plan.reach, options);
@@ -455,7 +466,19 @@ ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robo
       }
     }
   }
-  plan.chosen = chooseFrontier(plan.frontiers, grid, robot, room_of, options);
+  if (current) {
+    double nearest = same_goal;
+    for (size_t i = 0; i < plan.frontiers.size(); ++i) {
+      const Frontier& f = plan.frontiers[i];
+      if (f.goal < 0 || !std::isfinite(f.distance)) continue;
+      const double d = (grid.centre(f.goal) - *current).norm();
+      if (d <= nearest) {
+        nearest = d;
+        plan.chosen = i;
+      }
+    }
+  }
+  if (!plan.chosen) plan.chosen = chooseFrontier(plan.frontiers, grid, robot, room_of, options);
   if (plan.chosen) {
     plan.path = simplifyPath(pathTo(grid, plan.reach, plan.frontiers[*plan.chosen].goal),
                              grid.resolution());

@@ -17,12 +17,17 @@
 //   spot) costs narrow_penalty times more again, so that the robot squeezes
 //   past furniture only where there is no way round.
 // - A frontier is a connected group (8-neighbours) of free cells that touch
-//   an unknown cell (4-neighbours), at least `min_frontier_length` long, cut
+//   an unknown cell (4-neighbours) and keep `frontier_clearance` from every
+//   known non-free cell (a wall mapped twice, its copies a cell or two
+//   apart, leaves free cells between them that touch the unknown behind
+//   the wall: the laser can never see there), at least `min_frontier_length` long, cut
 //   into pieces of at most `max_frontier_length` along its length (a room's
 //   whole unseen edge is many places to look from, not one); its goal is
 //   the reachable cell nearest its centroid among its cells and those
-//   within goal_clearance of them that keep goal_clearance from obstacles
-//   (room for the robot to turn there).
+//   within twice goal_clearance of them that keep goal_clearance from
+//   obstacles and from the unknown (room for the robot to turn there, even
+//   beside a wall not seen yet: a goal in the unseen gap behind furniture
+//   would wedge the robot).
 // - chooseFrontier() prefers finishing the robot's current room (a room
 //   label per position, e.g. from the walls and doorways of
 //   mecp/room_gating.h), then the lowest cost: path length minus
@@ -50,6 +55,7 @@ struct ExplorationOptions {
   double wall_penalty = 3.0;         // extra cost of a step at the inflation's edge (× its length)
   double goal_clearance = 0.5;       // m from obstacles a goal keeps: room to turn on the spot
   double narrow_penalty = 10.0;      // cost factor of a step with less than goal_clearance
+  double frontier_clearance = 0.1;   // m from known non-free cells a frontier cell keeps
   double min_frontier_length = 0.5;  // m of frontier (cells times resolution)
   double max_frontier_length = 2.0;  // m: longer frontiers are cut into pieces this long
   double gain_weight = 1.0;          // m of path a metre of frontier is worth
@@ -63,6 +69,7 @@ struct ExplorationOptions {
     v.number("wall_penalty", wall_penalty, Bounds::closed(0.0, 100.0, ""));
     v.number("goal_clearance", goal_clearance, Bounds::closed(0.0, 5.0, "m"));
     v.number("narrow_penalty", narrow_penalty, Bounds::closed(1.0, 1000.0, ""));
+    v.number("frontier_clearance", frontier_clearance, Bounds::closed(0.0, 1.0, "m"));
     v.number("min_frontier_length", min_frontier_length, Bounds::closed(0.0, 100.0, "m"));
     v.number("max_frontier_length", max_frontier_length, Bounds::closed(0.1, 1000.0, "m"));
     v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));
@@ -96,6 +103,13 @@ class ExplorationGrid {
   double clearance(int cell) const {
     return clearance_.empty() ? std::numeric_limits<double>::infinity() : clearance_[cell];
   }
+  // The same from the nearest cell that is not known free (the unknown as
+  // well), up to goal_clearance: where a goal leaves room to turn even
+  // beside a wall not seen yet.
+  double openClearance(int cell) const {
+    return open_clearance_.empty() ? std::numeric_limits<double>::infinity()
+                                   : open_clearance_[cell];
+  }
 
  private:
   int width_ = 0, height_ = 0;
@@ -106,7 +120,8 @@ class ExplorationGrid {
   std::vector<int8_t> cells_;
   std::vector<bool> traversable_;
   std::vector<double> weight_;
-  std::vector<double> clearance_;  // m; empty when neither option needs it
+  std::vector<double> clearance_;       // m; empty when neither option needs it
+  std::vector<double> open_clearance_;  // m; empty without goal_clearance
 };
 
 // Marks the unknown cells within `radius` of `p` free: the floor under the
@@ -193,7 +208,11 @@ using Excluded = std::function<bool(const Vector2&)>;
 // One planning round from the robot's position: its reach, the frontiers
 // (those whose goal `excluded` names keep no goal), the one chosen and the
 // path to its goal (simplified to within a cell). No choice when no
-// frontier is reachable.
+// frontier is reachable. `current`: the goal the robot is driving to; the
+// frontier whose goal lies within `same_goal` (m) of it is kept while it
+// lasts and can be reached, whatever chooseFrontier would prefer on the
+// newer map: the robot finishes what it set out for (a room it is heading
+// into) rather than turning round at every map.
 struct ExplorationPlan {
   Reach reach;
   std::vector<Frontier> frontiers;
@@ -202,6 +221,8 @@ struct ExplorationPlan {
 };
 ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
                                 const RoomOf& room_of, const Excluded& excluded,
-                                const ExplorationOptions& options);
+                                const ExplorationOptions& options,
+                                const std::optional<Vector2>& current = std::nullopt,
+                                double same_goal = 0.0);
 
 }  // namespace ekf_slam

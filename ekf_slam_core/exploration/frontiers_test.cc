@@ -59,6 +59,32 @@ TEST(Frontiers, FoundAlongTheEdgeOfTheKnownAndSmallOnesLeftOut) {
   EXPECT_EQ(findFrontiers(grid, reach, options).size(), 1u);
 }
 
+// A room 1.45 m × 1 m on 5 cm cells, open to the unknown on its right; its
+// top wall mapped twice, the outer copy with a 1.3 m gap through which the
+// free cells between the copies touch the unknown beyond the wall.
+TEST(Frontiers, AWallMappedTwiceIsNoFrontier) {
+  std::vector<std::string> rows;
+  rows.push_back(std::string(34, '?'));
+  rows.push_back("####" + std::string(26, '.') + "####");
+  rows.push_back(std::string(34, '#'));
+  for (int r = 0; r < 20; ++r) rows.push_back("#" + std::string(29, '.') + "????");
+  rows.push_back(std::string(30, '#') + "????");
+  GridMapFile map = drawn(rows);
+  map.resolution = 0.05;
+  ExplorationOptions options;
+  options.robot_radius = 0.1;
+  options.frontier_clearance = 0.0;
+  const ExplorationGrid all(map, options);
+  const Vector2 robot(0.5, 0.5);
+  ASSERT_EQ(findFrontiers(all, reachFrom(all, robot), options).size(), 2u);
+  options.frontier_clearance = 0.1;
+  const ExplorationGrid open(map, options);
+  const std::vector<Frontier> frontiers = findFrontiers(open, reachFrom(open, robot), options);
+  ASSERT_EQ(frontiers.size(), 1u);
+  EXPECT_NEAR(frontiers[0].centroid.x(), 1.475, 1e-9) << "the open side, not the wall";
+  EXPECT_EQ(frontiers[0].cells.size(), 18u) << "less the cells beside the walls";
+}
+
 // Two rooms joined by a door in a wall; whether the robot gets through
 // depends on the door's width against its radius.
 std::vector<std::string> twoRoomsWithADoor(int door_cells) {
@@ -187,6 +213,19 @@ TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   ASSERT_TRUE(without_rooms && with_rooms);
   EXPECT_GT(frontiers[*without_rooms].centroid.x(), 2.0) << "the nearer one, through the door";
   EXPECT_LT(frontiers[*with_rooms].centroid.x(), 2.0) << "the robot's own room first";
+
+  // Driving to the other room's frontier, the robot keeps to it while it
+  // lasts; a goal whose frontier is gone leaves the choice to the rooms.
+  const Vector2 other = grid.centre(frontiers[*without_rooms].goal);
+  const ExplorationPlan kept =
+      planExploration(grid, robot, room_of, nullptr, options, other + Vector2(0.3, 0.0), 0.5);
+  ASSERT_TRUE(kept.chosen);
+  EXPECT_LT((grid.centre(kept.frontiers[*kept.chosen].goal) - other).norm(), 1e-9);
+  EXPECT_LT((kept.path.back() - other).norm(), 1e-9);
+  const ExplorationPlan gone =
+      planExploration(grid, robot, room_of, nullptr, options, Vector2(3.0, 1.0), 0.5);
+  ASSERT_TRUE(gone.chosen);
+  EXPECT_LT(gone.frontiers[*gone.chosen].centroid.x(), 2.0);
 }
 
 // A corridor 1.4 m wide (y from 0.1 to 1.5 m) and 4 m long.
@@ -238,6 +277,27 @@ TEST(Frontiers, AGoalKeepsRoomToTurnFromTheWalls) {
     EXPECT_GE(grid.clearance(frontiers[0].goal), goal_clearance);
     if (goal_clearance == 0.0) {
       EXPECT_LT(grid.clearance(frontiers[0].goal), 0.5) << "the frontier itself, by the wall";
+    }
+  }
+}
+
+// Goals keep goal_clearance from the unknown as well as from the walls:
+// the unknown may hide a wall (the back of furniture), and a goal beside
+// it could leave the robot no room to turn.
+TEST(Frontiers, AGoalKeepsRoomFromTheUnknownToo) {
+  ExplorationOptions options;
+  options.robot_radius = 0.15;
+  const GridMapFile map = drawn(roomOpenToTheRight());
+  const ExplorationGrid grid(map, options);
+  const Reach reach = reachFrom(grid, Vector2(0.55, 0.65));
+  const std::vector<Frontier> frontiers = findFrontiers(grid, reach, options);
+  ASSERT_EQ(frontiers.size(), 2u);
+  for (const Frontier& f : frontiers) {
+    ASSERT_GE(f.goal, 0);
+    for (int c = 0; c < grid.cellCount(); ++c) {
+      if (grid.unknown(c)) {
+        EXPECT_GE((grid.centre(c) - grid.centre(f.goal)).norm(), options.goal_clearance - 1e-9);
+      }
     }
   }
 }

@@ -357,8 +357,11 @@ class Explorer {
       const int cell = grid.cellAt(p);
       return cell < 0 ? -1 : rooms[cell];
     };
+    // The goal driven to is kept while its frontier lasts (the room it lies
+    // in is finished before another is begun).
     const ekf_slam::ExplorationPlan plan = ekf_slam::planExploration(
-        grid, robot, room_of, [this](const Vector2& g) { return givenUp(g); }, params_.exploration);
+        grid, robot, room_of, [this](const Vector2& g) { return givenUp(g); }, params_.exploration,
+        goal_, params_.goal_radius);
     frontiers_ = plan.frontiers.size();
     publishFrontiers(grid, plan, now);
     if (!plan.reach.reachable(plan.reach.start)) {
