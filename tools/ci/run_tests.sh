@@ -11,26 +11,31 @@ source "$ws/devel/setup.bash"
 export ROS_HOME="$ws/ros_home"
 rm -rf "$ROS_HOME/log"
 mkdir -p "$ROS_HOME"
-# Two lanes, one test at a time in each. Most of the time of the tests of
-# the drivers and of the simulated robot is wall-clock time of serial links
-# at their real baud rates (a lap of the simulated robot takes minutes and a
-# fraction of one core): those tests, the real-time lane, share the machine
-# with the rest, the other rostests (log replays, which want a core) and
-# the gtests. The real-time lane: rostests whose launch file includes
-# sim.launch, and every test of the driver packages (p3dx_*, lms200_*,
-# serial_io, and the rostests of p3dx_driver and sick_lms200_driver).
-# TEST_LANES=1 runs everything in one lane, as `catkin_make run_tests -j1`
-# does.
+# Lanes, one test at a time in each. Most of the time of the tests
+# of the drivers and of the simulated robot is wall-clock time of serial
+# links at their real baud rates (a lap of the simulated robot takes
+# minutes and a fraction of one core): those tests, the real-time lane,
+# share the machine with the rest, the other rostests (log replays, which
+# want a core) and the gtests. The real-time lane: rostests whose launch
+# file includes sim.launch, and every test of the driver packages (p3dx_*,
+# lms200_*, serial_io, and the rostests of p3dx_driver and
+# sick_lms200_driver). Each unattended exploration of a simulated world
+# (test/explore_*.test: six to nine minutes of driving, a fifth of a core)
+# is a lane of its own. TEST_LANES=1 runs everything in one lane, as
+# `catkin_make run_tests -j1` does.
 # catkin's run_tests_<package>_<type>_<name> targets run one test each;
 # unlike the _run_tests_* ones that `catkin_make run_tests` uses, they
 # neither re-check the build of every test nor clear the results of the
 # tests before them.
 targets=$(make -C "$ws/build" help | sed -n 's/^\.\.\. \(run_tests_ekf_slam_\(gtest\|rostest\|roslaunch-check\)_.*\)$/\1/p')
 realtime=()
+explore=()
 rest=()
 for target in $targets; do
   lane=rest
   case $target in
+    run_tests_ekf_slam_rostest_test_explore_*)
+      lane=explore ;;
     run_tests_ekf_slam_rostest_test_*)
       grep -q 'launch/sim.launch' "$root/test/${target#run_tests_ekf_slam_rostest_test_}" 2>/dev/null &&
         lane=realtime ;;
@@ -39,13 +44,17 @@ for target in $targets; do
       run_tests_ekf_slam_rostest_sick_lms200_driver_*)
       lane=realtime ;;
   esac
-  if [ "${TEST_LANES:-2}" != 1 ] && [ $lane = realtime ]; then
+  if [ "${TEST_LANES:-}" = 1 ]; then
+    rest+=("$target")
+  elif [ $lane = realtime ]; then
     realtime+=("$target")
+  elif [ $lane = explore ]; then
+    explore+=("$target")
   else
     rest+=("$target")
   fi
 done
-echo "run_tests: ${#realtime[@]} tests of the drivers and the simulated robot beside ${#rest[@]} others; logs $ws/run_tests_*.log"
+echo "run_tests: ${#realtime[@]} tests of the drivers and the simulated robot and ${#explore[@]} explorations beside ${#rest[@]} others; logs $ws/run_tests_*.log"
 run_lane() {  # run_lane LOG TARGET...: each target in turn, on past failures
   local log=$1
   shift
@@ -54,10 +63,21 @@ run_lane() {  # run_lane LOG TARGET...: each target in turn, on past failures
 }
 run_lane "$ws/run_tests_realtime.log" "${realtime[@]}" &
 realtime_pid=$!
+explore_pids=()
+explore_logs=()
+for target in "${explore[@]}"; do
+  explore_logs+=("$ws/run_tests_explore_${#explore_logs[@]}.log")
+  run_lane "${explore_logs[-1]}" "$target" &
+  explore_pids+=($!)
+done
 run_lane "$ws/run_tests_rest.log" "${rest[@]}"
 status=$?
 wait $realtime_pid || status=$?
-cat "$ws/run_tests_rest.log" "$ws/run_tests_realtime.log" > "$ws/run_tests.log" 2>/dev/null
+for pid in "${explore_pids[@]}"; do
+  wait "$pid" || status=$?
+done
+cat "$ws/run_tests_rest.log" "$ws/run_tests_realtime.log" "${explore_logs[@]}" \
+  > "$ws/run_tests.log" 2>/dev/null
 grep -E '^\[ *(RUN|  FAILED|  SKIPPED) *\]|^\[ROSTEST\]|^\[ROSUNIT\]|FAILURE|rostest.*failed' "$ws/run_tests.log" | grep -v '^\[ RUN' | tail -n 60 || true
 if [ $status -ne 0 ]; then
   echo "run_tests: running the tests exited with $status; log: $ws/run_tests.log" >&2
@@ -69,7 +89,7 @@ grep -h 'process has died.*exit code -' "$ROS_HOME"/log/rostest-*.log 2>/dev/nul
 # Each test target leaves one result file (rosunit's are a rostest's
 # inner report); fewer means results were lost, and the counts below are
 # short by whatever they held.
-expected=$(( ${#realtime[@]} + ${#rest[@]} ))
+expected=$(( ${#realtime[@]} + ${#explore[@]} + ${#rest[@]} ))
 found=$(find "$results" -name 'gtest-*.xml' -o -name 'rostest-*.xml' -o -name 'roslaunch-check*.xml' | wc -l)
 if [ "$found" -lt "$expected" ]; then
   echo "run_tests: $found result files for $expected test targets: some results were lost" >&2
