@@ -56,7 +56,7 @@ bool loadParams(const ros::NodeHandle& private_node, DriverParams* params, std::
   load.text("waypoints_file", &params->waypoints_file);
   load.text("global_frame", &params->global_frame);
   load.text("base_frame", &params->base_frame);
-  load.text("odom_frame", &params->odom_frame);
+  load.text("odom_frame", &params->odom_frame, /*required=*/false);
   load.integer("laps", &params->laps, 1, 1000);
   load.number("rate", &params->rate, 1.0, 200.0);
   load.number("tf_timeout", &params->tf_timeout, 0.05, 10.0);
