@@ -85,7 +85,7 @@ class SmoothDuringReplay(ReplayTest):
             print("~smooth: %.3f s: %s" % (end - start, response.message))
             self.assertTrue(response.success, response.message)
         self.assertGreaterEqual(len(self.smoothed_paths), CALLS)
-        self.assertGreater(min(self.smoothed_paths), FIRST_CALL_AFTER)
+        self.assertGreaterEqual(min(self.smoothed_paths), FIRST_CALL_AFTER)
 
         # map -> odom while the solves ran.
         first, last_end = calls[0][0], calls[-1][1]
