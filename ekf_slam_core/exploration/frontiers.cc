@@ -454,15 +454,39 @@ std::vector<int> segmentRooms(const ExplorationGrid& grid, double door_width) {
 ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
                                 const RoomOf& room_of, const Excluded& excluded,
                                 const ExplorationOptions& options,
-                                const std::optional<Vector2>& current, double same_goal) {
+                                const std::optional<Vector2>& current, double same_goal,
+                                const std::vector<Vector2>& finished_rooms) {
   ExplorationPlan plan;
   plan.reach = reachFrom(grid, robot);
   plan.frontiers = findFrontiers(grid, plan.reach, options);
+  auto dropGoal = [](Frontier& f) {
+    f.goal = -1;
+    f.distance = kInfinity;
+  };
   if (excluded) {
     for (Frontier& f : plan.frontiers) {
-      if (f.goal >= 0 && excluded(grid.centre(f.goal))) {
-        f.goal = -1;
-        f.distance = kInfinity;
+      if (f.goal >= 0 && excluded(grid.centre(f.goal))) dropGoal(f);
+    }
+  }
+  // The finished rooms' labels on this grid; the robot's own stays open.
+  const int room = room_of ? room_of(robot) : -1;
+  auto roomOfGoal = [&](const Frontier& f) { return room_of(grid.centre(f.goal)); };
+  std::vector<int> finished;
+  bool robot_room_finished = false;
+  if (room_of) {
+    for (const Vector2& p : finished_rooms) {
+      const int r = room_of(p);
+      if (r < 0) continue;
+      if (r == room) {
+        robot_room_finished = true;
+      } else {
+        finished.push_back(r);
+      }
+    }
+    for (Frontier& f : plan.frontiers) {
+      if (f.goal >= 0 && f.length < options.reopen_length &&
+          std::find(finished.begin(), finished.end(), roomOfGoal(f)) != finished.end()) {
+        dropGoal(f);
       }
     }
   }
@@ -479,9 +503,15 @@ ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robo
     }
   }
   if (!plan.chosen) plan.chosen = chooseFrontier(plan.frontiers, grid, robot, room_of, options);
-  if (plan.chosen) {
-    plan.path = simplifyPath(pathTo(grid, plan.reach, plan.frontiers[*plan.chosen].goal),
-                             grid.resolution());
+  if (!plan.chosen) return plan;
+  plan.path =
+      simplifyPath(pathTo(grid, plan.reach, plan.frontiers[*plan.chosen].goal), grid.resolution());
+  // Leaving the robot's room with nothing left in it: the room is finished.
+  if (room >= 0 && !robot_room_finished && roomOfGoal(plan.frontiers[*plan.chosen]) != room &&
+      std::none_of(plan.frontiers.begin(), plan.frontiers.end(), [&](const Frontier& f) {
+        return f.goal >= 0 && std::isfinite(f.distance) && roomOfGoal(f) == room;
+      })) {
+    plan.finished_room = robot;
   }
   return plan;
 }

@@ -31,7 +31,9 @@
 // - chooseFrontier() prefers finishing the robot's current room (a room
 //   label per position, e.g. from the walls and doorways of
 //   mecp/room_gating.h), then the lowest cost: path length minus
-//   `gain_weight` times the frontier's length.
+//   `gain_weight` times the frontier's length. planExploration() remembers
+//   the rooms left finished and goes back into one only for a frontier at
+//   least `reopen_length` long.
 // No ROS; the node that drives the robot (its planner loop, the path
 // follower and the safety gate) is above.
 #pragma once
@@ -60,6 +62,7 @@ struct ExplorationOptions {
   double max_frontier_length = 2.0;  // m: longer frontiers are cut into pieces this long
   double gain_weight = 1.0;          // m of path a metre of frontier is worth
   double door_width = 1.2;  // m: free space splits into rooms at passages this narrow; 0: no rooms
+  double reopen_length = 2.0;  // m of frontier that draws the robot back into a finished room
 
   template <class Visitor>
   void visitFields(Visitor& v) {
@@ -74,6 +77,7 @@ struct ExplorationOptions {
     v.number("max_frontier_length", max_frontier_length, Bounds::closed(0.1, 1000.0, "m"));
     v.number("gain_weight", gain_weight, Bounds::closed(0.0, 1000.0, "m/m"));
     v.number("door_width", door_width, Bounds::closed(0.0, 10.0, "m"));
+    v.number("reopen_length", reopen_length, Bounds::closed(0.0, 1000.0, "m"));
   }
 };
 
@@ -208,21 +212,34 @@ using Excluded = std::function<bool(const Vector2&)>;
 // One planning round from the robot's position: its reach, the frontiers
 // (those whose goal `excluded` names keep no goal), the one chosen and the
 // path to its goal (simplified to within a cell). No choice when no
-// frontier is reachable. `current`: the goal the robot is driving to; the
-// frontier whose goal lies within `same_goal` (m) of it is kept while it
-// lasts and can be reached, whatever chooseFrontier would prefer on the
-// newer map: the robot finishes what it set out for (a room it is heading
-// into) rather than turning round at every map.
+// frontier is reachable.
+// - `current`: the goal the robot is driving to; the frontier whose goal
+//   lies within `same_goal` (m) of it is kept while it lasts and can be
+//   reached, whatever chooseFrontier would prefer on the newer map: the
+//   robot finishes what it set out for (a room it is heading into) rather
+//   than turning round at every map.
+// - `finished_rooms`: a position in each room the robot has left finished
+//   (the plan's `finished_room` of earlier rounds). A frontier in one of
+//   them, other than the robot's own, keeps no goal unless it is at least
+//   reopen_length long: the map still changes in a room the robot has left
+//   (a SLAM correction redraws it, the laser looks in through its door),
+//   and the crumbs that come and go behind its furniture are not worth
+//   driving back for; a passage found is.
 struct ExplorationPlan {
   Reach reach;
   std::vector<Frontier> frontiers;
   std::optional<size_t> chosen;
   std::vector<Vector2> path;
+  // The robot's position when the choice leaves its room and no frontier
+  // in that room keeps a goal (the room is finished), unless the room is
+  // among `finished_rooms` already.
+  std::optional<Vector2> finished_room;
 };
 ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robot,
                                 const RoomOf& room_of, const Excluded& excluded,
                                 const ExplorationOptions& options,
                                 const std::optional<Vector2>& current = std::nullopt,
-                                double same_goal = 0.0);
+                                double same_goal = 0.0,
+                                const std::vector<Vector2>& finished_rooms = {});
 
 }  // namespace ekf_slam

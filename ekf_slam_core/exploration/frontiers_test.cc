@@ -228,6 +228,44 @@ TEST(Frontiers, TheRobotsOwnRoomComesFirst) {
   EXPECT_LT(gone.frontiers[*gone.chosen].centroid.x(), 2.0);
 }
 
+// Two rooms, the right one with a gap of `gap_cells` in its top wall onto
+// the unknown; the robot stands in the left one, which holds no frontier.
+TEST(Frontiers, ARoomLeftFinishedIsEnteredAgainOnlyForALongFrontier) {
+  auto planWith = [](int gap_cells, const Vector2& robot, const std::vector<Vector2>& finished) {
+    std::vector<std::string> rows = twoRoomsWithADoor(8);
+    for (int x = 30 - gap_cells / 2; x < 30 - gap_cells / 2 + gap_cells; ++x) rows[0][x] = '?';
+    ExplorationOptions options;
+    options.robot_radius = 0.15;
+    options.goal_clearance = 0.3;
+    options.reopen_length = 1.0;
+    const ExplorationGrid grid(drawn(rows), options);
+    const std::vector<int> rooms = segmentRooms(grid, options.door_width);
+    const RoomOf room_of = [&grid, rooms](const Vector2& p) {
+      const int cell = grid.cellAt(p);
+      return cell < 0 ? -1 : rooms[cell];
+    };
+    EXPECT_NE(room_of(Vector2(1.0, 1.0)), room_of(Vector2(3.0, 1.0))) << "the door splits them";
+    return planExploration(grid, robot, room_of, nullptr, options, std::nullopt, 0.0, finished);
+  };
+  const Vector2 left(1.0, 1.0), right(3.0, 1.0);
+  // Crumbs: a frontier shorter than reopen_length (1 m).
+  const ExplorationPlan first = planWith(7, left, {});
+  ASSERT_EQ(first.frontiers.size(), 1u);
+  EXPECT_LT(first.frontiers[0].length, 1.0);
+  ASSERT_TRUE(first.chosen) << "a room not yet finished is entered for any frontier";
+  ASSERT_TRUE(first.finished_room) << "leaving the left room with nothing in it finishes it";
+  EXPECT_LT((*first.finished_room - left).norm(), 1e-9);
+  EXPECT_FALSE(planWith(7, left, {left}).finished_room) << "finished once, reported once";
+
+  EXPECT_FALSE(planWith(7, left, {right}).chosen) << "not back into a finished room for crumbs";
+  const ExplorationPlan inside = planWith(7, right, {right});
+  ASSERT_TRUE(inside.chosen) << "the robot's own room stays open";
+  EXPECT_FALSE(inside.finished_room);
+  const ExplorationPlan passage = planWith(15, left, {right});
+  ASSERT_TRUE(passage.chosen) << "a frontier of 1.5 m reopens the room";
+  EXPECT_GE(passage.frontiers[*passage.chosen].length, 1.0);
+}
+
 // A corridor 1.4 m wide (y from 0.1 to 1.5 m) and 4 m long.
 std::vector<std::string> corridor() {
   std::vector<std::string> rows;

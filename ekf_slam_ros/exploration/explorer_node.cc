@@ -358,11 +358,17 @@ class Explorer {
       return cell < 0 ? -1 : rooms[cell];
     };
     // The goal driven to is kept while its frontier lasts (the room it lies
-    // in is finished before another is begun).
+    // in is finished before another is begun); a room left finished is
+    // entered again only for a long frontier.
     const ekf_slam::ExplorationPlan plan = ekf_slam::planExploration(
         grid, robot, room_of, [this](const Vector2& g) { return givenUp(g); }, params_.exploration,
-        goal_, params_.goal_radius);
+        goal_, params_.goal_radius, finished_rooms_);
     frontiers_ = plan.frontiers.size();
+    if (plan.finished_room) {
+      finished_rooms_.push_back(*plan.finished_room);
+      ROS_INFO("explorer: the room around (%.2f, %.2f) is finished (%zu rooms so far)", robot.x(),
+               robot.y(), finished_rooms_.size());
+    }
     publishFrontiers(grid, plan, now);
     if (!plan.reach.reachable(plan.reach.start)) {
       return nothingReachable("the robot's cell is not free on the map (the robot is off the map)");
@@ -373,10 +379,11 @@ class Explorer {
                                 std::to_string(plan.frontiers.size()) +
                                 " frontiers, none reachable: the robot is enclosed)");
       }
-      return endExploring(plan.frontiers.empty() ? std::string("no frontier is left")
-                                                 : "no reachable frontier is left (" +
-                                                       std::to_string(plan.frontiers.size()) +
-                                                       " unreachable or given up)");
+      return endExploring(plan.frontiers.empty()
+                              ? std::string("no frontier is left")
+                              : "no reachable frontier is left (" +
+                                    std::to_string(plan.frontiers.size()) +
+                                    " unreachable, given up or short ones in finished rooms)");
     }
     if (!nothing_reachable_.empty()) ROS_INFO("explorer: a frontier is reachable now");
     nothing_reachable_.clear();
@@ -702,6 +709,7 @@ class Explorer {
     status.add("time (s)", (ros::Time::now() - started_).toSec());
     status.add("frontiers", frontiers_);
     status.add("goals given up", given_up_);
+    status.add("rooms finished", finished_rooms_.size());
     if (explored_in_ > 0.0) {
       status.add("exploring took (s)", explored_in_);
       status.add("exploring drove (m)", explored_distance_);
@@ -742,6 +750,7 @@ class Explorer {
   std::unique_ptr<waypoints::PurePursuit> pursuit_;
   waypoints::BlockageRecovery recovery_;
   std::vector<GoalRecord> goals_;
+  std::vector<Vector2> finished_rooms_;  // a position in each room left finished
   double driven_ = 0.0;
   double explored_in_ = 0.0, explored_distance_ = 0.0;
   size_t frontiers_ = 0;
