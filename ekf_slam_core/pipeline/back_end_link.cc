@@ -171,7 +171,14 @@ void BackEndLink::finish() {
 }
 
 std::vector<StampedPose> BackEndLink::optimizedScanPoses() const {
-  return back_end_ ? back_end_->drained().scanPoses() : std::vector<StampedPose>();
+  if (!back_end_) return {};
+  // The graph lives in the control source's frame (the odometry's heading at
+  // the start); the map frame is the filter's, as every other trajectory.
+  std::vector<StampedPose> out = back_end_->drained().scanPoses();
+  if (map_from_graph_) {
+    for (StampedPose& p : out) p.pose = compose(*map_from_graph_, p.pose);
+  }
+  return out;
 }
 
 // The back end's loop edges join key scans; a key scan's pose is its

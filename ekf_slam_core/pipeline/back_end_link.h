@@ -89,7 +89,8 @@ class BackEndLink {
     return front_end_offset_ ? compose(*front_end_offset_, odometry) : odometry;
   }
 
-  // The final optimisation after the last scan; then one pose per scan.
+  // The final optimisation after the last scan; then one pose per scan, in
+  // the map frame.
   void finish();
   std::vector<StampedPose> optimizedScanPoses() const;
   const LoopCloser* loopCloser() const { return back_end_ ? &back_end_->drained() : nullptr; }

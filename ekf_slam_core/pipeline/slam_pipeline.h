@@ -168,7 +168,8 @@ class SlamPipeline {
 
   // Loop closure (options.loop_closure.enabled): finishLoopClosure() runs
   // the final optimisation after the last scan; optimizedScanPoses() then
-  // gives one pose per scan (empty when loop closure is off).
+  // gives one pose per scan in the map frame (empty when loop closure is
+  // off).
   void finishLoopClosure() { back_end_.finish(); }
   std::vector<StampedPose> optimizedScanPoses() const { return back_end_.optimizedScanPoses(); }
   // The loop closer itself, once it has processed every scan (waits for

@@ -433,6 +433,18 @@ TEST(SlamPipeline, AnInitialPoseMovesTheWholeEstimateRigidly) {
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_LT(maxAbsDifference(compose(start, a[i].pose), b[i].pose), 1e-4) << "scan " << i;
   }
+  // The loop-closed trajectory as well, though its graph runs in the
+  // odometry's frame (the offline map is drawn from it).
+  at_origin.finishLoopClosure();
+  moved.finishLoopClosure();
+  const std::vector<StampedPose> oa = at_origin.optimizedScanPoses();
+  const std::vector<StampedPose> ob = moved.optimizedScanPoses();
+  ASSERT_EQ(oa.size(), ob.size());
+  ASSERT_FALSE(ob.empty());
+  EXPECT_LT(maxAbsDifference(ob.front().pose, start), 1e-9);
+  for (size_t i = 0; i < oa.size(); ++i) {
+    EXPECT_LT(maxAbsDifference(compose(start, oa[i].pose), ob[i].pose), 1e-9) << "scan " << i;
+  }
 
   // A pose the filter cannot use is refused by the options' check.
   moved_options.initial_pose.x = std::nan("");
