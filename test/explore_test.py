@@ -6,7 +6,9 @@ gate in the loop. The explorer must end by itself (~done), back within
 of the free space the simulator knows to be reachable from the start; and
 the robot must never touch a wall (no stall from the P3-DX driver). The
 safety gate's stops, the time and the distance driven are printed, and with
---out written to a YAML file.
+--out written to a YAML file. With --saved BASE (the explorer's save_path)
+the map and the SLAM state it saved at the end must be there, written
+during the run: BASE.yaml (landmarks), BASE_grid.yaml and .pgm, BASE.state.
 
 With --rooms (the rooms world, ekf_slam_tools.worlds.rooms_layout) the
 order in which the robot entered the rooms (ground truth, at least
@@ -155,10 +157,13 @@ class Explore(unittest.TestCase):
         parser.add_argument("--out", default="")
         parser.add_argument("--rooms", action="store_true",
                             help="the rooms world: check the order of the rooms")
+        parser.add_argument("--saved", default="",
+                            help="the explorer's save_path: check what it saved")
         args, _ = parser.parse_known_args(argv)
         rospy.init_node("explore_test")
         r = Recorder()
         started = time.monotonic()
+        started_wall = time.time()
         while not rospy.is_shutdown() and not r.done and time.monotonic() - started < args.timeout:
             time.sleep(0.5)
         elapsed = time.monotonic() - started
@@ -192,6 +197,12 @@ class Explore(unittest.TestCase):
             os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
             with open(args.out, "w") as f:
                 yaml.safe_dump(result, f, default_flow_style=False)
+        if args.saved:
+            for suffix in (".yaml", "_grid.yaml", "_grid.pgm", ".state"):
+                path = args.saved + suffix
+                self.assertTrue(os.path.isfile(path), "the explorer did not save %s" % path)
+                self.assertGreaterEqual(os.path.getmtime(path), started_wall - 1.0,
+                                        "%s is older than this run" % path)
         self.assertFalse(r.stalled, "the robot touched a wall (the driver reported a stall)")
         self.assertLess(home, HOME, "ended %.2f m from its start" % home)
         self.assertGreaterEqual(covered, COVERAGE, "the map covers %.1f %% of the reachable "
