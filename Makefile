@@ -26,7 +26,7 @@ RVIZ  ?= 0
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: all deps workspace build test demo bench bench-workspace benchmark landmark-comparison line-experiment fuzz sanitize sanitize-thread format check clean
+.PHONY: all deps workspace build test demo figures bench bench-workspace benchmark landmark-comparison line-experiment fuzz sanitize sanitize-thread format check clean
 
 all: build
 
@@ -62,6 +62,12 @@ test: build check
 
 demo: build
 	@source $(WS)/devel/setup.bash && RVIZ=$(RVIZ) tools/ci/run_demo.sh $(OUT)
+
+# The thesis's Chapter 5 experiments redrawn: the loop closing on a
+# simulated landmark world, the carton layout through the whole system, and
+# the real logs offline; figures and figures.md in output/figures/.
+figures: build
+	@tools/dev/chapter5_figures.sh $(WS)/devel $(OUT)/figures
 
 # The Release workspace (native code, benchmark tools) for the measurements
 # on the real logs.

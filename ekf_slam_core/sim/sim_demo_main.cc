@@ -2,12 +2,20 @@
 // association, writing what `make demo` shows (first version of the demo;
 // no ROS involved).
 //
-//   ekf_slam_sim_demo --out DIR [--laps N] [--seed S] [--jcbb]
+//   ekf_slam_sim_demo --out DIR [--laps N] [--seed S] [--jcbb] [--max-range R]
 //
 // Writes into DIR: trajectory_estimated.txt, trajectory_true.txt,
 // trajectory_odometry.txt (stamp x y theta), landmarks_estimated.txt
 // (id x y cov_xx cov_xy cov_yy observations), landmarks_true.txt (x y),
 // report.txt; prints the final pose error and the average NEES.
+//
+// The loop closing (the thesis's Fig. 5.2): the step in which the robot's
+// position variance (the trace of its 2 × 2 block) falls the most, when a
+// landmark mapped long before is seen again and, through the correlations,
+// every estimate is pulled in. The filter just before and just after that
+// step: landmarks_{before,after}_closing.txt (as landmarks_estimated.txt)
+// and robot_{before,after}_closing.txt (stamp x y theta cov_xx cov_xy
+// cov_yy).
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -29,11 +37,39 @@ namespace {
 
 using ekf_slam::Pose2;
 
-void usage() { std::cerr << "usage: ekf_slam_sim_demo --out DIR [--laps N] [--seed S] [--jcbb]\n"; }
+void usage() {
+  std::cerr
+      << "usage: ekf_slam_sim_demo --out DIR [--laps N] [--seed S] [--jcbb] [--max-range R]\n";
+}
 
 void writePose(std::ofstream& out, double stamp, const Pose2& pose) {
   out << std::fixed << std::setprecision(6) << stamp << ' ' << pose.x << ' ' << pose.y << ' '
       << pose.theta << '\n';
+}
+
+void writeLandmarks(const std::string& path, const ekf_slam::EkfSlam& filter) {
+  std::ofstream lm(path);
+  lm << "# id x y cov_xx cov_xy cov_yy observations\n";
+  for (int slot = 0; slot < filter.landmarkCount(); ++slot) {
+    const ekf_slam::Vector2 p = filter.landmarkPosition(slot);
+    const ekf_slam::Matrix2 c = filter.landmarkCovariance(slot);
+    lm << filter.landmarks()[slot].id << ' ' << p.x() << ' ' << p.y() << ' ' << c(0, 0) << ' '
+       << c(0, 1) << ' ' << c(1, 1) << ' ' << filter.landmarks()[slot].observations << '\n';
+  }
+}
+
+void writeRobot(const std::string& path, double stamp, const ekf_slam::EkfSlam& filter) {
+  std::ofstream out(path);
+  const Pose2 p = filter.pose();
+  const ekf_slam::Matrix3 c = filter.poseCovariance();
+  out << "# stamp x y theta cov_xx cov_xy cov_yy\n"
+      << std::setprecision(9) << stamp << ' ' << p.x << ' ' << p.y << ' ' << p.theta << ' '
+      << c(0, 0) << ' ' << c(0, 1) << ' ' << c(1, 1) << '\n';
+}
+
+double positionVariance(const ekf_slam::EkfSlam& filter) {
+  const ekf_slam::Matrix3 c = filter.poseCovariance();
+  return c(0, 0) + c(1, 1);
 }
 
 }  // namespace
@@ -51,6 +87,8 @@ int main(int argc, char** argv) {
       sim_options.laps = std::atoi(argv[++i]);
     } else if (arg == "--seed" && i + 1 < argc) {
       sim_options.seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
+    } else if (arg == "--max-range" && i + 1 < argc) {
+      sim_options.max_range = std::atof(argv[++i]);
     } else if (arg == "--jcbb") {
       association.method = ekf_slam::AssociationMethod::kJointCompatibility;
     } else {
@@ -58,7 +96,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (out_dir.empty() || sim_options.laps < 1) {
+  if (out_dir.empty() || sim_options.laps < 1 || !(sim_options.max_range > sim_options.min_range)) {
     usage();
     return 2;
   }
@@ -105,10 +143,23 @@ int main(int argc, char** argv) {
   double nees_sum = 0.0, nis_sum = 0.0;
   long steps = 0, nis_count = 0, failures = 0;
   long correct = 0, matches = 0;
+  // The loop closing: the filter before and after the step with the
+  // largest fall of the robot's position variance.
+  ekf_slam::EkfSlam previous = filter, before_closing = filter, after_closing = filter;
+  double largest_fall = 0.0, previous_stamp = sim.current().stamp;
+  double before_stamp = previous_stamp, after_stamp = previous_stamp;
   while (sim.next()) {
     const ekf_slam::sim::SimStep& s = sim.current();
+    previous = filter;
     const ekf_slam::IterationReport report = ekf_slam::runIteration(
         filter, association, odom, s.odometry, sim_options.dt, s.observations);
+    if (positionVariance(previous) - positionVariance(filter) > largest_fall) {
+      largest_fall = positionVariance(previous) - positionVariance(filter);
+      before_closing = previous;
+      after_closing = filter;
+      before_stamp = previous_stamp;
+      after_stamp = s.stamp;
+    }
     odom = s.odometry;
     if (!report.ok()) ++failures;
     for (size_t i = 0; i < report.matches.size(); ++i) {
@@ -126,16 +177,14 @@ int main(int argc, char** argv) {
     writePose(est, s.stamp, filter.pose());
     writePose(truth, s.stamp, s.true_pose);
     writePose(odo, s.stamp, odomInMap(s.odometry));
+    previous_stamp = s.stamp;
   }
 
-  std::ofstream lm(out_dir + "/landmarks_estimated.txt");
-  lm << "# id x y cov_xx cov_xy cov_yy observations\n";
-  for (int slot = 0; slot < filter.landmarkCount(); ++slot) {
-    const ekf_slam::Vector2 p = filter.landmarkPosition(slot);
-    const ekf_slam::Matrix2 c = filter.landmarkCovariance(slot);
-    lm << filter.landmarks()[slot].id << ' ' << p.x() << ' ' << p.y() << ' ' << c(0, 0) << ' '
-       << c(0, 1) << ' ' << c(1, 1) << ' ' << filter.landmarks()[slot].observations << '\n';
-  }
+  writeLandmarks(out_dir + "/landmarks_estimated.txt", filter);
+  writeLandmarks(out_dir + "/landmarks_before_closing.txt", before_closing);
+  writeLandmarks(out_dir + "/landmarks_after_closing.txt", after_closing);
+  writeRobot(out_dir + "/robot_before_closing.txt", before_stamp, before_closing);
+  writeRobot(out_dir + "/robot_after_closing.txt", after_stamp, after_closing);
   std::ofstream lt(out_dir + "/landmarks_true.txt");
   for (const ekf_slam::Vector2& p : sim.landmarks()) lt << p.x() << ' ' << p.y() << '\n';
 
@@ -163,7 +212,10 @@ int main(int argc, char** argv) {
          << "average NIS: " << nis_sum / std::max(1L, nis_count) << " (expected 2)\n"
          << "landmarks: " << filter.landmarkCount() << " mapped, " << sim.landmarks().size()
          << " in the world\n"
-         << "correct pairings: " << correct << " / " << matches << "\n";
+         << "correct pairings: " << correct << " / " << matches << "\n"
+         << "loop closing: at " << after_stamp << " s the robot's position variance fell from "
+         << positionVariance(before_closing) << " to " << positionVariance(after_closing)
+         << " m^2\n";
   std::ofstream(out_dir + "/report.txt") << report.str();
   std::cout << report.str();
   return 0;

@@ -208,6 +208,14 @@ def in_frame_of(traj, first_pose):
     return out
 
 
+def final_poses(out_dir):
+    """What map.pgm was drawn from: the loop-closed trajectory when there is
+    one, else the smoothed."""
+    if os.path.exists(os.path.join(out_dir, "trajectory_optimized.txt")):
+        return "loop-closed"
+    return "smoothed"
+
+
 def map_panel(image, corner, out_dir, base, title, traj, margin=5.0):
     panel = Panel(image, corner[0], corner[1], *bounds(traj[:, 1], traj[:, 2], margin))
     panel.map_image(out_dir, base)
@@ -239,7 +247,7 @@ def main(out_dir):
         slam.dots(np.array([m["x"] for m in landmarks]), np.array([m["y"] for m in landmarks]),
                   RED)
         entries.append(("landmarks", RED, "dot"))
-    slam.frame("EKF-SLAM (smoothed) map and path")
+    slam.frame("EKF-SLAM map (%s poses) and smoothed path" % final_poses(out_dir))
     slam.legend(entries)
     wheels = map_panel(image, corners[1], out_dir, "map_odometry", "", odometry)
     wheels.path(odometry[:, 1], odometry[:, 2], RED)
@@ -268,7 +276,7 @@ def main(out_dir):
     before = map_panel(image, corners[0], out_dir, "map_filtered", "", filtered)
     after = map_panel(image, corners[1], out_dir, "map", "", smoothed)
     before.frame("grid from the filtered poses")
-    after.frame("grid from the smoothed poses")
+    after.frame("grid from the %s poses" % final_poses(out_dir))
     save(image, out_dir, "fig_smoothing.png")
     print("figures written to " + out_dir)
 

@@ -38,6 +38,7 @@ tools/dev/localization_check.sh    # starts the source tree's tools/dev/sim_moni
 tools/dev/stage_comparison.sh      # reads ../shared/datasets beside the checkout
 tools/dev/replay_screenshots.sh    # starts the source tree's tools/dev/rviz_screenshot.py, writes docs/images
 tools/dev/continue_mapping_check.sh # reads ../shared/datasets beside the checkout
+tools/dev/chapter5_figures.sh      # make figures: reads ../shared/datasets beside the checkout
 tools/dev/compare_outputs.sh       # compares two benchmark output folders of the checkout
 tools/dev/code_shape.py            # measures class, function and member-list sizes of the checkout
 tools/dev/solver_comparison.sh     # builds a workspace of the checkout, reads ../shared/datasets
