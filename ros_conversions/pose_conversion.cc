@@ -20,6 +20,18 @@ geometry_msgs::Quaternion quaternionOfYaw(double yaw) {
   return q;
 }
 
+geometry_msgs::Quaternion quaternionOfRollPitchYaw(double roll, double pitch, double yaw) {
+  const double cr = std::cos(0.5 * roll), sr = std::sin(0.5 * roll);
+  const double cp = std::cos(0.5 * pitch), sp = std::sin(0.5 * pitch);
+  const double cy = std::cos(0.5 * yaw), sy = std::sin(0.5 * yaw);
+  geometry_msgs::Quaternion q;
+  q.w = cr * cp * cy + sr * sp * sy;
+  q.x = sr * cp * cy - cr * sp * sy;
+  q.y = cr * sp * cy + sr * cp * sy;
+  q.z = cr * cp * sy - sr * sp * cy;
+  return q;
+}
+
 nav_msgs::Path toPathMessage(const std::vector<Vector2>& points, const std_msgs::Header& header) {
   nav_msgs::Path path;
   path.header = header;
@@ -60,6 +72,9 @@ LaserMount laserMountOf(const geometry_msgs::Transform& transform) {
   mount.tilt = std::acos(std::min(1.0, std::abs(up)));
   mount.roll = std::atan2(2.0 * (q.w * q.x + q.y * q.z), up);
   mount.pitch = std::asin(std::max(-1.0, std::min(1.0, 2.0 * (q.w * q.y - q.z * q.x))));
+  // Mirroring a scan (its bearings negated) turns roll π + δ into δ.
+  mount.scan_roll = mount.inverted ? wrapAngle(mount.roll - kPi) : mount.roll;
+  mount.scan_pitch = mount.pitch;
   return mount;
 }
 

@@ -21,6 +21,9 @@ namespace ros_conversions {
 // The rotation's heading about z (a planar robot: roll and pitch ignored).
 double yawOf(const geometry_msgs::Quaternion& q);
 geometry_msgs::Quaternion quaternionOfYaw(double yaw);
+// The rotation yaw · pitch · roll (about z, then y, then x: REP-103's roll,
+// pitch and yaw; laserMountOf reads them back).
+geometry_msgs::Quaternion quaternionOfRollPitchYaw(double roll, double pitch, double yaw);
 
 geometry_msgs::Pose toPoseMessage(const Pose2& pose);
 Pose2 fromPoseMessage(const geometry_msgs::Pose& pose);
@@ -35,13 +38,18 @@ nav_msgs::Path toPathMessage(const std::vector<Vector2>& points, const std_msgs:
 // 0°). `inverted`: the laser's z axis points down (roll or pitch near π),
 // so its bearings run clockwise seen from above (see mirroredScan). `tilt`:
 // the angle between its scan plane and the floor, 0 when level, upright or
-// inverted; `roll` and `pitch` (rad) for messages.
+// inverted; `roll` and `pitch` (rad) for messages. `scan_roll` and
+// `scan_pitch`: the tilt as levelledScan takes it, for the scan as the
+// pipeline sees it (mirrored first when inverted: the roll then counts from
+// π); both exactly 0 for a level mount.
 struct LaserMount {
   Pose2 pose;
   bool inverted = false;
   double tilt = 0.0;
   double roll = 0.0;
   double pitch = 0.0;
+  double scan_roll = 0.0;
+  double scan_pitch = 0.0;
 };
 LaserMount laserMountOf(const geometry_msgs::Transform& transform);
 

@@ -5,8 +5,10 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "ekf_slam_core/geometry/angle.h"
+#include "ekf_slam_core/sensors/scan.h"
 
 namespace ekf_slam {
 namespace ros_conversions {
@@ -96,6 +98,68 @@ TEST(PoseConversion, ATiltedMountGivesItsTiltRollAndPitch) {
   const LaserMount inverted = laserMountOf(mountTransform(kPi - degToRad(5.0), 0.0, 0.0));
   EXPECT_TRUE(inverted.inverted);
   EXPECT_NEAR(inverted.tilt, degToRad(5.0), 1e-12);
+  // A level mount, upright or not, has nothing to level, exactly.
+  for (double roll : {0.0, kPi}) {
+    const LaserMount level = laserMountOf(mountTransform(roll, 0.0, 0.4));
+    EXPECT_EQ(level.scan_roll, 0.0);
+    EXPECT_EQ(level.scan_pitch, 0.0);
+  }
+}
+
+// Upside down and tilted: the mirrored scan's beam at −α, bent by the scan's
+// roll and pitch, points where the inverted laser's beam at α does.
+TEST(PoseConversion, AnInvertedTiltedMountLevelsItsMirroredScan) {
+  for (const auto& [roll, pitch] :
+       {std::pair<double, double>{kPi - 0.05, 0.03}, {-kPi + 0.04, -0.02}}) {
+    const geometry_msgs::Transform t = mountTransform(roll, pitch, 0.8);
+    const LaserMount mount = laserMountOf(t);
+    ASSERT_TRUE(mount.inverted);
+    const Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+    for (double alpha : {-1.2, 0.0, 0.5, 1.4}) {
+      const TiltedBeam beam = tiltedBeam(-alpha, mount.scan_roll, mount.scan_pitch);
+      const Eigen::Vector3d d = q * Eigen::Vector3d(std::cos(alpha), std::sin(alpha), 0.0);
+      EXPECT_NEAR(wrapAngle(beam.level_bearing + mount.pose.theta - beamHeading(t, alpha)), 0.0,
+                  1e-12);
+      EXPECT_NEAR(beam.horizontal, std::hypot(d.x(), d.y()), 1e-12);
+    }
+  }
+}
+
+// The calibration file's roll, pitch and yaw become the transform's
+// rotation, and laserMountOf reads them back; the core's TiltedBeam, which
+// levels the scans, bends each beam as that rotation does.
+TEST(PoseConversion, RollPitchAndYawMakeTheMountsRotationAndTheBeamsItTilts) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> yaw(-kPi, kPi), tilt(-0.3, 0.3);
+  for (int i = 0; i < 100; ++i) {
+    const double r = tilt(rng), p = tilt(rng), y = yaw(rng);
+    geometry_msgs::Transform t = mountTransform(r, p, y);
+    const geometry_msgs::Quaternion q = quaternionOfRollPitchYaw(r, p, y);
+    EXPECT_NEAR(q.x, t.rotation.x, 1e-15);
+    EXPECT_NEAR(q.y, t.rotation.y, 1e-15);
+    EXPECT_NEAR(q.z, t.rotation.z, 1e-15);
+    EXPECT_NEAR(q.w, t.rotation.w, 1e-15);
+    const LaserMount mount = laserMountOf(t);
+    EXPECT_NEAR(mount.roll, r, 1e-12);
+    EXPECT_NEAR(mount.pitch, p, 1e-12);
+    EXPECT_NEAR(mount.pose.theta, y, 1e-12);
+    const Eigen::Quaterniond rotation(q.w, q.x, q.y, q.z);
+    for (double alpha : {-1.5, -0.4, 0.0, 0.9, 1.5}) {
+      const TiltedBeam beam = tiltedBeam(alpha, mount.roll, mount.pitch);
+      const Eigen::Vector3d d = rotation * Eigen::Vector3d(std::cos(alpha), std::sin(alpha), 0.0);
+      EXPECT_NEAR(wrapAngle(beam.level_bearing + mount.pose.theta - beamHeading(t, alpha)), 0.0,
+                  1e-12);
+      EXPECT_NEAR(beam.horizontal, std::hypot(d.x(), d.y()), 1e-12);
+      EXPECT_NEAR(beam.rise, d.z(), 1e-12);
+    }
+  }
+  // Level: the quaternion of the yaw alone, bit for bit.
+  const geometry_msgs::Quaternion level = quaternionOfRollPitchYaw(0.0, 0.0, 0.7);
+  const geometry_msgs::Quaternion yaw_only = quaternionOfYaw(0.7);
+  EXPECT_EQ(level.x, 0.0);
+  EXPECT_EQ(level.y, 0.0);
+  EXPECT_EQ(level.z, yaw_only.z);
+  EXPECT_EQ(level.w, yaw_only.w);
 }
 
 TEST(PoseConversion, PlanarCovarianceIsTheXYYawBlock) {

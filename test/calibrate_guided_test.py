@@ -1,9 +1,14 @@
 #!/usr/bin/python3
 """calibrate_laser_guided through a real pseudo-terminal on the simulated
-robot with a mis-mounted laser (test/calibrate_guided.test): the prompts are
-answered as an operator would (no pitch or roll, then go), the tool drives
-the robot itself, and the calibration file it writes must hold the true
-mount: yaw within 0.3 degrees, x and y within 1 cm."""
+robot with a mis-mounted, tilted laser (test/calibrate_guided.test): the
+prompts are answered as an operator would, the tool drives the robot itself,
+and the calibration file it writes must hold the true mount: yaw within 0.3
+degrees, x and y within 1 cm, pitch and roll within 0.2 degrees.
+
+Step 1's heights are what an operator measures with a tape (to the
+millimetre) at the objects the beam just grazes, 1 m and 3 m ahead for the
+pitch and to the right for the roll: the simulated world has no object
+heights, so they come from the true mount's beam."""
 import math
 import os
 import tempfile
@@ -15,6 +20,21 @@ import rostest
 import yaml
 
 from ekf_slam_tools.terminal import TerminalProgram
+
+
+def grazing_heights(mount, bearing, near=1.0, far=3.0):
+    """The operator's answer to a step-1 prompt: the heights (to the mm) at
+    which the mount's beam at `bearing` passes objects `near` and `far`
+    metres away over the floor, and their distance (to the cm)."""
+    roll, pitch = mount.get("roll", 0.0), mount.get("pitch", 0.0)
+    c, s = math.cos(bearing), math.sin(bearing)
+    # The beam's direction, rotated by pitch about y after roll about x.
+    x = c * math.cos(pitch) + s * math.sin(roll) * math.sin(pitch)
+    y = s * math.cos(roll)
+    z = -c * math.sin(pitch) + s * math.sin(roll) * math.cos(pitch)
+    climb = z / math.hypot(x, y)  # metres up per metre over the floor
+    heights = [mount["z"] + d * climb for d in (near, far)]
+    return "%.3f %.3f %.2f" % (heights[0], heights[1], far - near)
 
 
 class CalibrateGuided(unittest.TestCase):
@@ -29,10 +49,13 @@ class CalibrateGuided(unittest.TestCase):
         tool = TerminalProgram(["rosrun", "ekf_slam", "calibrate_laser_guided",
                                 "_calibration:=" + nominal, "_write:=" + out])
         try:
-            self.assertTrue(tool.wait_for_text("pitch: heights", 30.0), tool.text())
-            tool.type("\n")  # no pitch measurement
-            self.assertTrue(tool.wait_for_text("roll: heights", 10.0), tool.text())
-            tool.type("\n")
+            self.assertTrue(tool.wait_for_text("pitch, two objects straight ahead", 30.0),
+                            tool.text())
+            tool.type(grazing_heights(truth, 0.0) + "\n")
+            self.assertTrue(tool.wait_for_text("l (left) or r (right)", 10.0), tool.text())
+            tool.type("r\n")
+            self.assertTrue(tool.wait_for_text("roll, right", 10.0), tool.text())
+            tool.type(grazing_heights(truth, -math.pi / 2.0) + "\n")
             self.assertTrue(tool.wait_for_text("Enter to go on", 20.0), tool.text())
             tool.type("\n")
             self.assertTrue(tool.wait_for_text("written to", 150.0), tool.text())
@@ -47,6 +70,9 @@ class CalibrateGuided(unittest.TestCase):
         self.assertLess(abs(result["x"] - truth["x"]), 0.01, result)
         self.assertLess(abs(result["y"] - truth["y"]), 0.01, result)
         self.assertEqual(result["child_frame"], "laser")
+        self.assertLess(abs(result["pitch"] - truth["pitch"]), math.radians(0.2), result)
+        self.assertLess(abs(result["roll"] - truth["roll"]), math.radians(0.2), result)
+        self.assertIn("the front is tipped up", text)
 
 
 if __name__ == "__main__":

@@ -91,6 +91,14 @@ class RobotConfiguration(unittest.TestCase):
         sonars = {link.get("name") for link in robot.findall("link")
                   if link.get("name").startswith("sonar_")}
         self.assertEqual(sonars, {"sonar_%d" % i for i in range(16)})
+        # A tilted mount: roll and pitch go to the joint too (URDF's rpy).
+        tilted = os.path.join(self.tmp, "tilted.yaml")
+        with open(tilted, "w") as stream:
+            stream.write(CALIBRATION + "roll: 0.01\npitch: -0.0349\n")
+        run = description(tilted)
+        self.assertEqual(run.returncode, 0, run.stderr)
+        origin = ElementTree.fromstring(run.stdout).find("joint[@name='laser_joint']/origin")
+        self.assertEqual([float(v) for v in origin.get("rpy").split()], [0.01, -0.0349, 0.0524])
 
     def test_bad_calibration_is_refused_with_the_key(self):
         path = os.path.join(self.tmp, "bad.yaml")

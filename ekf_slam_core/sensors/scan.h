@@ -46,6 +46,34 @@ struct Scan {
 // Mirroring twice gives the scan back.
 Scan mirroredScan(const Scan& scan);
 
+// One beam of a laser whose scan plane is tilted from the floor's. The
+// laser's rotation from a level laser at the same place and heading is
+// R_y(pitch) R_x(roll), ROS's roll and pitch (REP-103: a positive pitch
+// tips the front down, a positive roll the left side up). The beam at
+// `bearing` in the laser's own frame points, seen from above, at
+// `level_bearing`; each metre along it covers `horizontal` metres over the
+// floor and climbs `rise` metres.
+struct TiltedBeam {
+  double level_bearing = 0.0;  // rad
+  double horizontal = 1.0;     // cos of the beam's elevation
+  double rise = 0.0;           // sin of the beam's elevation
+};
+TiltedBeam tiltedBeam(double bearing, double roll, double pitch);
+
+// The scan a level laser at the same place and heading would report, from
+// the scan of one tilted by `roll` and `pitch` (TiltedBeam): walls taller
+// than the beams are where the level laser would see them. Each reading is
+// shortened to its distance over the floor and moved to its bearing seen
+// from above; the scan's own bearings are then filled from the two moved
+// beams that enclose each, linearly where both lie on one surface (ranges
+// within 5 cm + 5 %), else from the nearer. A bearing moves by about
+// tilt² / 4 (0.02° at 2°), far less than a beam step, so every beam stays
+// between its neighbours; the fill is exact to 0.2 mm on a wall 10 m away,
+// and cuts a corner by up to 4 mm in the beam beside it. Invalid readings
+// stay invalid. A level mount (both angles exactly 0) gives the scan back
+// unchanged, bit for bit.
+Scan levelledScan(const Scan& scan, double roll, double pitch);
+
 // Number of beams that carry a usable range.
 int countValidReadings(const Scan& scan);
 

@@ -54,9 +54,19 @@ std::vector<double> simulateRanges(const RayCaster& world, const Pose2& sensor_p
                                    std::mt19937* rng) {
   std::vector<double> ranges(sweep.count > 0 ? sweep.count : 0);
   std::normal_distribution<double> noise(0.0, range_sigma);
+  const bool tilted = sweep.roll != 0.0 || sweep.pitch != 0.0;
   for (int i = 0; i < sweep.count; ++i) {
-    const double beam = sensor_pose.theta + sweep.angle_min + i * sweep.angle_increment;
-    double r = world.castRay(sensor_pose.translation(), beam, sweep.max_range);
+    double r;
+    if (tilted) {
+      const TiltedBeam tilted_beam =
+          tiltedBeam(sweep.angle_min + i * sweep.angle_increment, sweep.roll, sweep.pitch);
+      r = world.castRay(sensor_pose.translation(), sensor_pose.theta + tilted_beam.level_bearing,
+                        sweep.max_range * tilted_beam.horizontal) /
+          tilted_beam.horizontal;
+    } else {
+      const double beam = sensor_pose.theta + sweep.angle_min + i * sweep.angle_increment;
+      r = world.castRay(sensor_pose.translation(), beam, sweep.max_range);
+    }
     if (std::isfinite(r) && rng != nullptr && range_sigma > 0.0) r = std::max(0.0, r + noise(*rng));
     ranges[i] = r;
   }

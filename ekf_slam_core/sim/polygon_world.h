@@ -49,6 +49,11 @@ struct SweepGeometry {
   double angle_increment = kPi / 180;  // rad
   int count = 181;
   double max_range = 8.0;  // m; beams hitting nothing return +inf
+  // rad, the scanner's tilt from level (TiltedBeam, sensors/scan.h): a beam
+  // reports its slant distance to the first wall along its direction seen
+  // from above. Walls are taller than any beam; there is no floor.
+  double roll = 0.0;
+  double pitch = 0.0;
 };
 
 // Ranges (m) seen from `sensor_pose` (the laser frame in the world). When

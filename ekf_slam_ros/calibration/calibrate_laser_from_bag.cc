@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
     std::snprintf(heading, sizeof(heading),
                   "The laser mount on the robot (base_link -> laser), estimated by\n"
                   "calibrate_laser_from_bag from %s: 1-sigma x %.4f m, y %.4f m, yaw %.4f rad,\n"
-                  "from %d scan pairs. z is carried over (display only).",
+                  "from %d scan pairs. z, roll and pitch are carried over.",
                   bag.c_str(), sx, sy, syaw, r.pairs_used);
     const std::string saved = calibration::saveLaserMount(write_file, estimate, heading);
     if (!saved.empty()) {

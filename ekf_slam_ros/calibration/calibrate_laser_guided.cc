@@ -4,8 +4,9 @@
 //
 //   rosrun ekf_slam calibrate_laser_guided [_write:=config/calibration.yaml]
 //
-// 1. pitch and roll: a calculator for two objects whose tops the beam just
-//    grazes (optional);
+// 1. pitch and roll: two objects whose tops the beam just grazes, straight
+//    ahead and to one side; the rise between them, signed as the mount's
+//    pitch and roll (optional; every later scan is levelled with them);
 // 2. a box corner placed about 1.5 m ahead, 30° to the left, is averaged over
 //    ~n_scans scans;
 // 3. the robot drives ~move_distance straight ahead (through cmd_vel_in, so
@@ -32,6 +33,7 @@
 #include <vector>
 
 #include "ekf_slam_core/extrinsics/thesis_procedure.h"
+#include "ekf_slam_core/sensors/scan.h"
 #include "ekf_slam_ros/calibration/laser_mount.h"
 #include "ekf_slam_ros/conversions/scan_conversion.h"
 #include "ros_params/private_params.h"
@@ -161,23 +163,60 @@ std::string ask(const std::string& prompt) {
   return line;
 }
 
-void tiltCalculator(const char* name) {
-  const std::string line = ask(std::string("  ") + name +
-                               ": heights h1 h2 of the nearer and farther object and their "
-                               "distance d along the beam, in m (empty: skip): ");
+// Step 1 (thesis eq. 3.36): the rise of the beam between two objects whose
+// tops it just grazes, h1 at the nearer, h2 at the farther, d apart along
+// the beam. Returns false (and leaves `rise`) when the operator skips.
+bool askRise(const std::string& where, double* rise) {
+  const std::string line =
+      ask("  " + where +
+          ": heights h1 h2 at which the beam just grazes the nearer and the farther object, "
+          "and their distance d along the beam, in m (empty: skip): ");
   double h1, h2, d;
-  if (std::sscanf(line.c_str(), "%lf %lf %lf", &h1, &h2, &d) == 3 && d > 0.0) {
-    const double tilt = ekf_slam::beamTilt(h1, h2, d);
-    std::printf("  %s: %.3f deg (%s); shim the mount until it is near 0: the SLAM is planar\n",
-                name, tilt * 180.0 / kPi, tilt > 0 ? "the beam rises" : "the beam falls");
+  if (std::sscanf(line.c_str(), "%lf %lf %lf", &h1, &h2, &d) != 3 || !(d > 0.0)) return false;
+  *rise = ekf_slam::beamTilt(h1, h2, d);
+  return true;
+}
+
+// The mount's pitch and roll from step 1, signed as the calibration file
+// keeps them (REP-103: a positive pitch tips the front down, a positive roll
+// lifts the left side). A beam that rises ahead has its front tipped up; one
+// that rises to the left has its left side up, to the right its left side
+// down. A step skipped keeps the value in use.
+void askTilt(ekf_slam::calibration::LaserMount* mount) {
+  std::printf(
+      "Step 1, pitch and roll (the SLAM levels every scan with them). An object is seen while\n"
+      "the beam meets it and lost once the beam passes over its top: for each object find the\n"
+      "height at which the beam just grazes it (raise the object, or a card on it, until the\n"
+      "scanner loses it). Pitch in use %.2f deg, roll %.2f deg.\n",
+      mount->pitch * 180.0 / kPi, mount->roll * 180.0 / kPi);
+  double rise = 0.0;
+  if (askRise("pitch, two objects straight ahead", &rise)) {
+    mount->pitch = -rise + 0.0;
+    std::printf("  the beam %s %.2f deg ahead: the front is tipped %s; pitch %.2f deg\n",
+                rise >= 0.0 ? "rises" : "falls", std::abs(rise) * 180.0 / kPi,
+                rise >= 0.0 ? "up" : "down", mount->pitch * 180.0 / kPi);
+  }
+  const std::string side =
+      ask("  roll, two objects to one side: l (left) or r (right) (empty: skip): ");
+  if ((side == "l" || side == "r") && askRise(side == "l" ? "roll, left" : "roll, right", &rise)) {
+    // Rising to the left lifts the left side; rising to the right lowers it.
+    mount->roll = (side == "l" ? rise : -rise) + 0.0;  // + 0.0: no "-0.00" for a level beam
+    std::printf("  the beam %s %.2f deg to the %s: the left side is %s; roll %.2f deg\n",
+                rise >= 0.0 ? "rises" : "falls", std::abs(rise) * 180.0 / kPi,
+                side == "l" ? "left" : "right", mount->roll >= 0.0 ? "up" : "down",
+                mount->roll * 180.0 / kPi);
   }
 }
 
-// The reference corner, averaged over n_scans scans, near `near` (laser frame).
-ekf_slam::FeatureSighting sight(Robot* robot, const GuidedParams& p, const Vector2& near,
+// The reference corner, averaged over n_scans scans levelled with the
+// mount's tilt, near `near` (laser frame).
+ekf_slam::FeatureSighting sight(Robot* robot, const GuidedParams& p,
+                                const ekf_slam::calibration::LaserMount& mount, const Vector2& near,
                                 double gate, const char* when) {
   std::printf("  averaging %d scans %s ...\n", p.n_scans, when);
-  const ekf_slam::FeatureSighting s = ekf_slam::sightFeature(robot->collect(p.n_scans), near, gate);
+  std::vector<ekf_slam::Scan> scans = robot->collect(p.n_scans);
+  for (ekf_slam::Scan& scan : scans) scan = ekf_slam::levelledScan(scan, mount.roll, mount.pitch);
+  const ekf_slam::FeatureSighting s = ekf_slam::sightFeature(scans, near, gate);
   if (s.ok) {
     std::printf("  corner at (%.4f, %.4f) m in the laser frame, from %d scans\n", s.mean.x(),
                 s.mean.y(), s.scans);
@@ -220,12 +259,9 @@ int main(int argc, char** argv) {
   Robot robot(node);
 
   std::printf(
-      "Laser mount calibration (thesis 3.4.1). Mount in use: x %.3f m, y %.3f m, yaw %.2f deg.\n"
-      "Step 1, pitch and roll: stand two objects of known height in the beam so that it just\n"
-      "grazes their tops (straight ahead for pitch, at the side for roll).\n",
+      "Laser mount calibration (thesis 3.4.1). Mount in use: x %.3f m, y %.3f m, yaw %.2f deg.\n",
       mount.x, mount.y, mount.yaw * 180.0 / kPi);
-  tiltCalculator("pitch");
-  tiltCalculator("roll");
+  askTilt(&mount);
 
   Pose2 odometry;
   for (int i = 0; i < 100 && !robot.odometry(&odometry); ++i) ros::WallDuration(0.1).sleep();
@@ -242,7 +278,7 @@ int main(int argc, char** argv) {
       p.move_distance);
   if (ask(prompt) == "q") return 0;
   const ekf_slam::FeatureSighting first =
-      sight(&robot, p, Vector2(1.3, 0.75), 0.8, "before the drive");
+      sight(&robot, p, mount, Vector2(1.3, 0.75), 0.8, "before the drive");
   if (!first.ok) return 1;
 
   if (p.drive) {
@@ -261,7 +297,8 @@ int main(int argc, char** argv) {
   std::printf("  moved %.4f m (turned %.2f deg on the way)\n", distance, drove.theta * 180.0 / kPi);
   const Vector2 expected_after =
       first.mean - Pose2(0, 0, mount.yaw).rotation().transpose() * Vector2(distance, 0.0);
-  const ekf_slam::FeatureSighting second = sight(&robot, p, expected_after, 0.3, "after the drive");
+  const ekf_slam::FeatureSighting second =
+      sight(&robot, p, mount, expected_after, 0.3, "after the drive");
   const ekf_slam::YawCalibration yaw = ekf_slam::yawFromStraightMove(first, second, distance);
   if (!yaw.ok) {
     std::printf("  no yaw: %s\n", yaw.message.c_str());
@@ -294,7 +331,7 @@ int main(int argc, char** argv) {
     const Vector2 in_robot = ekf_slam::transformFrom(believed, second.mean);
     const Vector2 near =
         ekf_slam::transformTo(believed, ekf_slam::transformTo(Pose2(0, 0, turned_total), in_robot));
-    const ekf_slam::FeatureSighting after = sight(&robot, p, near, 0.3, "after the turn");
+    const ekf_slam::FeatureSighting after = sight(&robot, p, mount, near, 0.3, "after the turn");
     const ekf_slam::TranslationCalibration t =
         ekf_slam::translationFromTurn(second, after, turned_total, yaw.yaw, yaw.sigma);
     if (!t.ok) {
@@ -315,18 +352,21 @@ int main(int argc, char** argv) {
   }
   const ekf_slam::Matrix2 covariance = information.inverse();
   const Vector2 translation = covariance * sum;
-  std::printf("Result: x %.4f +- %.4f m, y %.4f +- %.4f m, yaw %.5f +- %.5f rad (%.3f deg)\n",
-              translation.x(), std::sqrt(covariance(0, 0)), translation.y(),
-              std::sqrt(covariance(1, 1)), yaw.yaw, yaw.sigma, yaw.yaw * 180.0 / kPi);
+  std::printf(
+      "Result: x %.4f +- %.4f m, y %.4f +- %.4f m, yaw %.5f +- %.5f rad (%.3f deg), roll %.5f "
+      "rad, pitch %.5f rad\n",
+      translation.x(), std::sqrt(covariance(0, 0)), translation.y(), std::sqrt(covariance(1, 1)),
+      yaw.yaw, yaw.sigma, yaw.yaw * 180.0 / kPi, mount.roll, mount.pitch);
   if (!p.write.empty()) {
     ekf_slam::calibration::LaserMount result = mount;
     result.x = translation.x();
     result.y = translation.y();
     result.yaw = yaw.yaw;
-    char heading[256];
+    char heading[320];
     std::snprintf(heading, sizeof(heading),
                   "The laser mount (base_link -> laser) from calibrate_laser_guided (thesis\n"
-                  "3.4.1): 1-sigma x %.4f m, y %.4f m, yaw %.5f rad. z is carried over.",
+                  "3.4.1): 1-sigma x %.4f m, y %.4f m, yaw %.5f rad. Roll and pitch from the\n"
+                  "heights of step 1 (or as they were); z is carried over.",
                   std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1)), yaw.sigma);
     const std::string error = ekf_slam::calibration::saveLaserMount(p.write, result, heading);
     if (!error.empty()) {

@@ -41,12 +41,15 @@ int main(int argc, char** argv) {
   transform.transform.translation.x = mount.x;
   transform.transform.translation.y = mount.y;
   transform.transform.translation.z = mount.z;
-  transform.transform.rotation = ekf_slam::ros_conversions::quaternionOfYaw(mount.yaw);
+  transform.transform.rotation =
+      ekf_slam::ros_conversions::quaternionOfRollPitchYaw(mount.roll, mount.pitch, mount.yaw);
   tf2_ros::StaticTransformBroadcaster broadcaster;
   broadcaster.sendTransform(transform);
-  ROS_INFO("calibration: %s -> %s at x %.3f m, y %.3f m, z %.3f m, yaw %.4f rad (from %s)",
-           mount.parent_frame.c_str(), mount.child_frame.c_str(), mount.x, mount.y, mount.z,
-           mount.yaw, file.c_str());
+  ROS_INFO(
+      "calibration: %s -> %s at x %.3f m, y %.3f m, z %.3f m, yaw %.4f rad, roll %.4f rad, "
+      "pitch %.4f rad (from %s)",
+      mount.parent_frame.c_str(), mount.child_frame.c_str(), mount.x, mount.y, mount.z, mount.yaw,
+      mount.roll, mount.pitch, file.c_str());
   ros::spin();  // the latched message lives as long as this node
   return 0;
 }

@@ -18,9 +18,13 @@ class Reader {
  public:
   Reader(const YAML::Node& root, const std::string& file) : root_(root), file_(file) {}
 
-  void number(const char* key, double* value, double limit) {
+  // `optional`: a missing key leaves `value` as it is.
+  void number(const char* key, double* value, double limit, bool optional = false) {
     known_.insert(key);
-    if (!root_[key]) return fail(key, "missing (every key of this file is required)");
+    if (!root_[key]) {
+      if (optional) return;
+      return fail(key, "missing (every key of this file is required)");
+    }
     try {
       const double v = root_[key].as<double>();
       if (!std::isfinite(v) || std::abs(v) > limit) {
@@ -89,6 +93,9 @@ std::string loadLaserMount(const std::string& path, LaserMount* mount) {
   reader.number("y", &read.y, 2.0);
   reader.number("z", &read.z, 2.0);
   reader.number("yaw", &read.yaw, kPi);
+  // The tilt: 0 (level) when absent, as in files written before it was kept.
+  reader.number("roll", &read.roll, kPi, true);
+  reader.number("pitch", &read.pitch, kPi / 2.0, true);
   reader.rejectUnknownKeys();
   if (reader.errors().empty() && read.parent_frame == read.child_frame) {
     return path + ": child_frame: must differ from parent_frame";
@@ -111,7 +118,9 @@ std::string saveLaserMount(const std::string& path, const LaserMount& mount,
        << "y: " << mount.y << "     # m, left\n"
        << "z: " << mount.z << "     # m, up (display only)\n";
   text.precision(5);
-  text << "yaw: " << mount.yaw << "   # rad, counter-clockwise\n";
+  text << "yaw: " << mount.yaw << "   # rad, counter-clockwise\n"
+       << "roll: " << mount.roll << "  # rad, left side up\n"
+       << "pitch: " << mount.pitch << " # rad, front down\n";
   return writeFileAtomically(path, text.str());
 }
 

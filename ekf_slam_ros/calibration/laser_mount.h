@@ -17,6 +17,11 @@ struct LaserMount {
   double y = 0.0;    // m, left
   double z = 0.0;    // m, up (display only; the SLAM is planar)
   double yaw = 0.0;  // rad, counter-clockwise
+  // rad, the scan plane's tilt from the floor's (optional keys, 0 when
+  // absent): roll lifts the left side, pitch tips the front down (REP-103,
+  // rotation yaw · pitch · roll). The SLAM levels each scan with them.
+  double roll = 0.0;
+  double pitch = 0.0;
 
   // The planar part: the laser pose in base_link.
   Pose2 pose() const { return Pose2(x, y, yaw); }
@@ -24,8 +29,9 @@ struct LaserMount {
 
 // Reads `path`. Returns "" on success, else one message per problem, each
 // naming the file and the key ("calibration.yaml: yaw: must be in [-3.1416,
-// 3.1416], got 7"). Every key is required; unknown keys are errors (a typo
-// must not silently leave the laser at the origin).
+// 3.1416], got 7"). Every key is required but roll and pitch (0 when
+// absent); unknown keys are errors (a typo must not silently leave the
+// laser at the origin).
 std::string loadLaserMount(const std::string& path, LaserMount* mount);
 
 // Writes `mount` to `path` in the same format, atomically (a failure leaves

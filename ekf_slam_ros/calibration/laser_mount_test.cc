@@ -56,6 +56,28 @@ TEST(LaserMountTest, ReadsEveryKey) {
   EXPECT_NEAR(mount.pose().theta, 3.14, 1e-12);
 }
 
+// Roll and pitch: 0 when absent (files from before the tilt was kept),
+// read when given, bounded, and written back by saveLaserMount.
+TEST(LaserMountTest, TheTiltIsOptionalBoundedAndSaved) {
+  LaserMount mount;
+  ASSERT_EQ(loadLaserMount(writeTemp("mount_level.yaml", kValid), &mount), "");
+  EXPECT_EQ(mount.roll, 0.0);
+  EXPECT_EQ(mount.pitch, 0.0);
+  const std::string tilted = std::string(kValid) + "roll: 0.01\npitch: -0.0349\n";
+  ASSERT_EQ(loadLaserMount(writeTemp("mount_tilted.yaml", tilted), &mount), "");
+  EXPECT_DOUBLE_EQ(mount.roll, 0.01);
+  EXPECT_DOUBLE_EQ(mount.pitch, -0.0349);
+  const std::string saved = ::testing::TempDir() + "/mount_saved.yaml";
+  ASSERT_EQ(saveLaserMount(saved, mount, "a tilted mount"), "");
+  LaserMount back;
+  ASSERT_EQ(loadLaserMount(saved, &back), "");
+  EXPECT_DOUBLE_EQ(back.roll, 0.01);
+  EXPECT_DOUBLE_EQ(back.pitch, -0.0349);
+  const std::string steep = std::string(kValid) + "pitch: 2.0\n";
+  EXPECT_NE(loadLaserMount(writeTemp("mount_steep.yaml", steep), &mount).find("pitch: must be in"),
+            std::string::npos);
+}
+
 TEST(LaserMountTest, MissingFileNamesThePath) {
   LaserMount mount;
   const std::string error = loadLaserMount("/nonexistent/calibration.yaml", &mount);

@@ -5,7 +5,8 @@
     rosrun ekf_slam p3dx_description --no-laser [URDF]
 
 URDF defaults to config/p3dx.urdf of this package. The joint `laser_joint`
-gets the x, y, z and yaw of the calibration file, and its child link the
+gets the x, y, z, yaw, roll and pitch (0 when absent) of the calibration
+file (URDF's rpy: the same rotation yaw · pitch · roll), and its child link the
 calibration's child_frame, so that robot_state_publisher broadcasts the one
 mount that SLAM and the simulator read: config/calibration.yaml stays the
 only place that holds it. Exit status 1, with a message naming the file and
@@ -25,6 +26,7 @@ import xml.etree.ElementTree as ElementTree
 import yaml
 
 KEYS = ("parent_frame", "child_frame", "x", "y", "z", "yaw")
+OPTIONAL_KEYS = ("roll", "pitch")  # the tilt, 0 when absent
 
 
 def load_mount(path):
@@ -37,8 +39,9 @@ def load_mount(path):
     if not isinstance(data, dict):
         raise ValueError("%s: not a mapping of %s" % (path, ", ".join(KEYS)))
     problems = ["%s: %s: missing" % (path, key) for key in KEYS if key not in data]
-    problems += ["%s: %s: unknown key" % (path, key) for key in data if key not in KEYS]
-    for key in ("x", "y", "z", "yaw"):
+    problems += ["%s: %s: unknown key" % (path, key) for key in data
+                 if key not in KEYS + OPTIONAL_KEYS]
+    for key in ("x", "y", "z", "yaw") + OPTIONAL_KEYS:
         value = data.get(key)
         if key in data and (isinstance(value, bool) or not isinstance(value, (int, float))
                             or not math.isfinite(value)):
@@ -48,6 +51,8 @@ def load_mount(path):
             problems.append("%s: %s: must be a frame name, got %r" % (path, key, data[key]))
     if problems:
         raise ValueError("\n".join(problems))
+    for key in OPTIONAL_KEYS:
+        data.setdefault(key, 0.0)
     return data
 
 
@@ -70,7 +75,7 @@ def describe(urdf_path, mount):
         child.set("link", mount["child_frame"])
     origin = joint.find("origin")
     origin.set("xyz", "%.6f %.6f %.6f" % (mount["x"], mount["y"], mount["z"]))
-    origin.set("rpy", "0 0 %.9f" % mount["yaw"])
+    origin.set("rpy", "%.9f %.9f %.9f" % (mount["roll"], mount["pitch"], mount["yaw"]))
     return ElementTree.tostring(robot, encoding="unicode")
 
 

@@ -174,12 +174,18 @@ std::string readBag(const std::string& path, const InputOptions& options, LogDat
       data.laser_pose = mount.pose;
       data.laser_pose_found = true;
       data.laser_inverted = mount.inverted;
+      data.laser_roll = mount.scan_roll;
+      data.laser_pitch = mount.scan_pitch;
     }
   }
   // As the live node does: an upside-down laser's scans, as an upright one
-  // at its place would see them.
+  // at its place would see them; a tilted one's, as a level one would.
   if (data.laser_inverted) {
     for (LoggedScan& s : data.scans) s.scan = mirroredScan(s.scan);
+  }
+  if (data.laser_roll != 0.0 || data.laser_pitch != 0.0) {
+    for (LoggedScan& s : data.scans)
+      s.scan = levelledScan(s.scan, data.laser_roll, data.laser_pitch);
   }
   if (data.laser_frame == base_frame) data.laser_pose_found = true;  // laser at base_link
   track.finalize();

@@ -35,6 +35,10 @@ struct LogData {
   bool laser_pose_found = false;
   Pose2 laser_pose;             // base_link → laser, when found in the log
   bool laser_inverted = false;  // that laser upside down: its scans have been mirrored
+  // rad, that laser's tilt (ros_conversions::LaserMount::scan_roll, scan_pitch): its
+  // scans have been levelled (levelledScan).
+  double laser_roll = 0.0;
+  double laser_pitch = 0.0;
   std::string laser_frame;
   long odometry_samples = 0;
   long odometry_gaps = 0;  // scans whose odometry was not interpolated

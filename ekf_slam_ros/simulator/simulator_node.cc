@@ -144,6 +144,8 @@ int main(int argc, char** argv) {
   sick_lms200::EmulatorOptions laser_options;
   laser_options.range_noise_sigma = params.range_noise;
   laser_options.seed = static_cast<uint32_t>(params.seed) + 1;
+  laser_options.roll = mount.roll;
+  laser_options.pitch = mount.pitch;
   const Pose2 laser_in_base = mount.pose();
   sick_lms200::Lms200Emulator laser(
       lms200_pty, world, [&](double t) { return ekf_slam::compose(history.at(t), laser_in_base); },
@@ -159,6 +161,8 @@ int main(int argc, char** argv) {
   if (rear) {
     sick_lms200::EmulatorOptions rear_options = laser_options;
     rear_options.seed = static_cast<uint32_t>(params.seed) + 2;
+    rear_options.roll = rear_mount.roll;
+    rear_options.pitch = rear_mount.pitch;
     const Pose2 rear_in_base = rear_mount.pose();
     serial_io::PseudoTerminal* pty = rear_pty.get();
     rear_laser = std::make_unique<sick_lms200::Lms200Emulator>(
@@ -180,10 +184,10 @@ int main(int argc, char** argv) {
 
   ROS_INFO(
       "simulator: world %s (%d x %d cells), start (%.2f, %.2f, %.3f); P3-DX on %s, "
-      "LMS200 on %s; laser mount (%.3f, %.3f, %.3f) from %s",
+      "LMS200 on %s; laser mount (%.3f, %.3f, %.3f), roll %.4f, pitch %.4f rad from %s",
       params.world_file.c_str(), world.width(), world.height(), start.x, start.y, start.theta,
-      params.p3dx_link.c_str(), params.lms200_link.c_str(), mount.x, mount.y, mount.yaw,
-      params.calibration_file.c_str());
+      params.p3dx_link.c_str(), params.lms200_link.c_str(), mount.x, mount.y, mount.yaw, mount.roll,
+      mount.pitch, params.calibration_file.c_str());
   if (rear) {
     ROS_INFO("simulator: rear LMS200 on %s; laser mount (%.3f, %.3f, %.3f) from %s",
              params.rear_lms200_link.c_str(), rear_mount.x, rear_mount.y, rear_mount.yaw,

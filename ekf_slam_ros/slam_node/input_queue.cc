@@ -230,6 +230,11 @@ void InputQueue::release(PendingInput pending) {
     return;
   }
   if (mount.inverted) pending.scan = mirroredScan(*pending.scan);
+  // A tilted laser's beams, projected into the floor plane (features
+  // extracted elsewhere come as they are: level them there).
+  if (pending.scan && (mount.scan_roll != 0.0 || mount.scan_pitch != 0.0)) {
+    pending.scan = levelledScan(*pending.scan, mount.scan_roll, mount.scan_pitch);
+  }
   hooks_.released(pending, odometry, mount.pose);
 }
 

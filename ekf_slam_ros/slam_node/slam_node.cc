@@ -211,8 +211,9 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   if (pending.mount.tilt > params_.max_laser_tilt) {
     ROS_WARN_THROTTLE(30.0,
                       "ekf_slam_node: %s -> %s is tilted %.1f deg from level (roll %.1f, pitch "
-                      "%.1f deg; max_laser_tilt %.1f deg): the scan plane is not the floor's, "
-                      "walls are seen at other heights; fix the mount or its transform",
+                      "%.1f deg; max_laser_tilt %.1f deg): each scan is levelled, but beams "
+                      "this steep meet the floor and furniture below the walls; fix the mount "
+                      "or its transform",
                       params_.base_frame.c_str(), pending.header.frame_id.c_str(),
                       radToDeg(pending.mount.tilt), radToDeg(pending.mount.roll),
                       radToDeg(pending.mount.pitch), radToDeg(params_.max_laser_tilt));

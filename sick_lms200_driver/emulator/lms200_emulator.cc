@@ -260,6 +260,8 @@ std::vector<double> Lms200Emulator::castPartial(int k, double turn_start) const 
   geometry.angle_increment = ekf_slam::degToRad(1.0);
   geometry.count = partialBeamCount(angle_deg_, resolution_centideg_, k);
   geometry.max_range = maxRange(units());
+  geometry.roll = options_.roll;
+  geometry.pitch = options_.pitch;
   return ekf_slam::sim::simulateRanges(world_, pose_source_(turn_start), geometry);
 }
 

@@ -34,6 +34,10 @@ struct EmulatorOptions {
   int resolution_centideg = 100;      // power-on variant (1°)
   Units units = Units::kMillimetres;  // power-on units
   double range_noise_sigma = 0.01;    // m, Gaussian, on ranges that hit something
+  // rad, the scanner's tilt from level (ROS roll and pitch): its beams meet
+  // the walls, which are taller than any beam, further out.
+  double roll = 0.0;
+  double pitch = 0.0;
   std::string type_string = "LMS200;30106;V02.10 ;S01.31 ";
   double config_write_delay = 0.5;  // s between the 0x77 ACK and its reply (EEPROM write)
   // Fault injection, probabilities in [0, 1].
