@@ -459,15 +459,6 @@ ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robo
   ExplorationPlan plan;
   plan.reach = reachFrom(grid, robot);
   plan.frontiers = findFrontiers(grid, plan.reach, options);
-  auto dropGoal = [](Frontier& f) {
-    f.goal = -1;
-    f.distance = kInfinity;
-  };
-  if (excluded) {
-    for (Frontier& f : plan.frontiers) {
-      if (f.goal >= 0 && excluded(grid.centre(f.goal))) dropGoal(f);
-    }
-  }
   // The finished rooms' labels on this grid; the robot's own stays open.
   const int room = room_of ? room_of(robot) : -1;
   auto roomOfGoal = [&](const Frontier& f) { return room_of(grid.centre(f.goal)); };
@@ -483,11 +474,18 @@ ExplorationPlan planExploration(const ExplorationGrid& grid, const Vector2& robo
         finished.push_back(r);
       }
     }
-    for (Frontier& f : plan.frontiers) {
-      if (f.goal >= 0 && f.length < options.reopen_length &&
-          std::find(finished.begin(), finished.end(), roomOfGoal(f)) != finished.end()) {
-        dropGoal(f);
-      }
+  }
+  // Frontiers passed over keep no goal: one the caller excludes (given up),
+  // and a short one in a finished room.
+  auto passedOver = [&](const Frontier& f) {
+    if (excluded && excluded(grid.centre(f.goal))) return true;
+    return !finished.empty() && f.length < options.reopen_length &&
+           std::find(finished.begin(), finished.end(), roomOfGoal(f)) != finished.end();
+  };
+  for (Frontier& f : plan.frontiers) {
+    if (f.goal >= 0 && passedOver(f)) {
+      f.goal = -1;
+      f.distance = kInfinity;
     }
   }
   if (current) {
