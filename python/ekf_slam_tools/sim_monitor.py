@@ -34,7 +34,7 @@ import numpy as np
 import rospkg
 
 from ekf_slam_tools.se2 import compose, interpolate, inverse, transform_point, wrap
-from ekf_slam_tools.stats import effective_samples, nees_band
+from ekf_slam_tools.stats import nees_band, nees_effective_samples, whitened
 from ekf_slam_tools.worlds import read_world_image, world_vertices
 
 
@@ -48,11 +48,14 @@ from ekf_slam_tools.worlds import read_world_image, world_vertices
 TRUTH_SIGMA = (0.002, 0.002, 0.001)  # m, m, rad
 
 
-def score(truth, slam, odom, landmarks, vertices):
+def score(truth, slam, odom, landmarks, vertices, run_samples=None):
     """truth/odom: [(t, x, y, th)] (world / odom frame); slam: [(t, x, y, th,
     cov3x3)] (map frame); landmarks: [(id, x, y, cov2x2)] (map frame);
-    vertices: [(x, y)] world. Returns a dict of results plus the aligned
-    tracks."""
+    vertices: [(x, y)] world. run_samples: the independent samples one run
+    of this loop is worth, measured over many runs (the NEES band's count);
+    None: estimated from this run's errors alone, which counts too many
+    when part of the error lasts the whole run. Returns a dict of results
+    plus the aligned tracks."""
     # Poses the truth and the odometry both cover (the monitor may have
     # subscribed a moment after the first SLAM pose was published).
     usable = [s for s in slam
@@ -71,6 +74,7 @@ def score(truth, slam, odom, landmarks, vertices):
 
     rows = []
     nees = []
+    white = []
     for s in usable:
         t = s[0]
         true_map = compose(map_world, interpolate(truth, t))
@@ -78,7 +82,8 @@ def score(truth, slam, odom, landmarks, vertices):
         e = np.array([est[0] - true_map[0], est[1] - true_map[1], wrap(est[2] - true_map[2])])
         cov = np.asarray(s[4]) + np.diag(np.square(TRUTH_SIGMA))
         try:
-            nees.append(float(e @ np.linalg.solve(cov, e)))
+            white.append(whitened(e, cov))
+            nees.append(float(white[-1] @ white[-1]))
         except np.linalg.LinAlgError:
             pass
         o = interpolate(odom, t)
@@ -98,8 +103,9 @@ def score(truth, slam, odom, landmarks, vertices):
     odom_mean_pos = float(np.mean(odom_errors))
     odom_max_pos = float(np.max(odom_errors))
     max_pos = float(np.max([math.hypot(r[4][0], r[4][1]) for r in rows]))
-    n_eff = effective_samples(nees) if nees else 0.0
-    band = nees_band(3, n_eff) if n_eff >= 1 else (float("nan"), float("nan"))
+    n_eff = nees_effective_samples(white)
+    n_band = run_samples if run_samples else n_eff
+    band = nees_band(3, n_band) if n_band >= 1 else (float("nan"), float("nan"))
 
     # Duplicates: two landmarks statistically at the same place (3 sigma on
     # their difference) next to the same true corner.
@@ -136,6 +142,7 @@ def score(truth, slam, odom, landmarks, vertices):
         "nees_average": float(np.mean(nees)) if nees else float("nan"),
         "nees_samples": len(nees),
         "nees_effective_samples": n_eff,
+        "nees_run_samples": run_samples,
         "nees_band_95": band,
         "landmarks": len(landmarks),
         "landmarks_near_true_corners": sum(len(g) for g in nearest.values()),
@@ -154,14 +161,21 @@ def report_text(r):
         "mean position error: %.3f m, largest %.3f m (odometry alone: %.3f m, largest %.3f m)" % (
             r["mean_position_error"], r["max_position_error"], r["odometry_mean_position_error"],
             r["odometry_max_position_error"]),
-        "average pose NEES: %.2f over %d poses (%.0f independent), 95%% band %.2f..%.2f "
+        "average pose NEES: %.2f over %d poses (%s), 95%% band %.2f..%.2f "
         "(truth matched to %.0f mm, %.0f mrad)" % (
-            r["nees_average"], r["nees_samples"], r["nees_effective_samples"],
+            r["nees_average"], r["nees_samples"], nees_samples_text(r),
             r["nees_band_95"][0], r["nees_band_95"][1], 1e3 * TRUTH_SIGMA[0], 1e3 * TRUTH_SIGMA[2]),
         "landmarks: %d (%d within 0.3 m of a true corner), duplicated: %d" % (
             r["landmarks"], r["landmarks_near_true_corners"], len(r["duplicates"])),
     ] + live_map_lines(r.get("live_map")) +
         (["ended early: " + r["ended_early"]] if r.get("ended_early") else [])) + "\n"
+
+
+def nees_samples_text(r):
+    if r.get("nees_run_samples"):
+        return ("a loop worth %.1f independent samples over many runs; %.0f by this run's "
+                "errors alone" % (r["nees_run_samples"], r["nees_effective_samples"]))
+    return "%.0f independent" % r["nees_effective_samples"]
 
 
 def live_map_lines(live):
@@ -413,7 +427,7 @@ def run(args):
     recorder.done = True
     landmarks = recorder.finish(args.out)
     result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
-                   world_vertices(args.world))
+                   world_vertices(args.world), args.run_samples)
     result["ended_early"] = ended_early
     result["live_map"] = live_map
     world_yaml = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "worlds",
@@ -430,6 +444,10 @@ def main():
     parser.add_argument("--stall-timeout", type=float, default=30.0,
                         help="s without the true robot moving that end a run as lost")
     parser.add_argument("--slam-node", default="/ekf_slam")
+    parser.add_argument("--run-samples", type=float, metavar="N",
+                        help="independent samples one run of this loop is worth, from the spread "
+                        "of many runs (tools/dev/office_monte_carlo.sh), for the NEES band; "
+                        "default: estimated from this run alone")
     parser.add_argument("--resume-after-recorder", metavar="NODE",
                         help="SLAM was started paused: resume it once NODE records /scan")
     args, _ = parser.parse_known_args([a for a in sys.argv[1:] if not a.startswith("__")])

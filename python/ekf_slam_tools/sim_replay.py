@@ -36,8 +36,8 @@ def smoothed_tolerance(filtered_error):
     """How much larger than the filter's the smoother's mean error may come
     out before "not worse" fails: SMOOTHED_TOLERANCE, plus
     SMOOTHED_RELATIVE_TOLERANCE of the filter's error. A run's poses are
-    correlated over a few seconds (an office loop holds about 30
-    independent ones, sim_monitor's NEES count), so one run's mean error is
+    correlated over a few seconds (an office loop holds about 30 stretches
+    whose errors vary apart), so one run's mean error is
     known to about 1/sqrt(30), 18 %, of itself, and the smoother, better in
     expectation, can come out behind in one noise draw by about that much:
     office loops gave 8.1 / 38.8 / 9.4 mm smoothed against 30.9 / 42.8 /

@@ -21,11 +21,11 @@ number of independent samples, the rms normalised error per axis (1.0
 when the filter's sigma fits its errors) and the position error (mean,
 largest, final), so that a change bought with accuracy shows. With several bags (recordings
 with different noise seeds: tools/dev/office_monte_carlo.sh) it also prints the
-Monte Carlo figure: the NEES averaged over all runs against the band for
-the runs' effective samples together. One run holds only ~5-30
-independent samples (its errors are correlated over the whole loop), so
-its band is wide and one unlucky odometry drift moves it; the pooled
-figure is the consistency test.
+Monte Carlo figure: the NEES averaged over all runs against the band the
+runs' own spread gives, and what one run is worth in independent samples.
+One office loop is worth only two or three (its errors against the start
+last the whole loop), so one run's figure says little; the pooled figure
+is the consistency test.
 """
 import argparse
 import math
@@ -66,7 +66,7 @@ def score(truth, run_dir):
     map_world = se2.inverse(
         se2.compose(se2.interpolate(truth, stamps[0]), se2.inverse(first)))
     allowance = np.diag(np.square(TRUTH_SIGMA))
-    nees, normalised, distances = [], [], []
+    white, normalised, distances = [], [], []
     for s in stamps:
         est = poses[s][1:4]
         true = se2.compose(map_world, se2.interpolate(truth, s))
@@ -74,10 +74,11 @@ def score(truth, run_dir):
         distances.append(math.hypot(e[0], e[1]))
         c = covariances[s][1:]
         cov = np.array([[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]]) + allowance
-        nees.append(float(e @ np.linalg.solve(cov, e)))
+        white.append(stats.whitened(e, cov))
         normalised.append(e / np.sqrt(np.diag(cov)))
-    samples = stats.effective_samples(nees)
-    band = stats.nees_band(3, max(1, int(round(samples))))
+    nees = [float(w @ w) for w in white]
+    samples = stats.nees_effective_samples(white)
+    band = stats.nees_band(3, samples)
     rms = np.sqrt(np.mean(np.square(normalised), axis=0))
     errors = (float(np.mean(distances)), max(distances), distances[-1])
     return np.mean(nees), len(nees), samples, band, rms, errors
@@ -116,17 +117,20 @@ def main():
         inverse_samples += 1.0 / samples
     if len(means) > 1:
         pooled = sum(means) / len(means)
-        # Independent runs, each run's average weighted equally: run i's
-        # average of n_i independent chi-square(3) values has variance 6 / n_i,
-        # so the average over R runs has 6 / N with N = R^2 / sum(1 / n_i)
-        # (equal to the total sample count only when every n_i is the same; a
-        # run with few independent samples widens the band, as it should).
-        equivalent = len(means) ** 2 / inverse_samples
-        band = stats.nees_band(3, max(1, int(round(equivalent))))
+        # The runs are independent draws of one loop's average NEES: their
+        # spread shows how far one average strays, whatever the correlation
+        # of the poses within a run (which one run cannot measure when part
+        # of its error lasts the whole run). Consistent, their mean is 3.
+        band = stats.runs_band(3.0, means)
         inside = band[0] <= pooled <= band[1]
-        print("Monte Carlo over %d runs: average pose NEES %.2f (worth %.0f independent "
-              "samples), 95%% band %.2f..%.2f: %s" % (len(means), pooled, equivalent, band[0],
-                                                      band[1], "inside" if inside else "outside"))
+        # What one run is worth: 6 / variance of its average, for chi-square(3).
+        spread = float(np.var(means, ddof=1))
+        print("Monte Carlo over %d runs: average pose NEES %.2f (runs from %.2f to %.2f), 95%% "
+              "band %.2f..%.2f (3 +- t s / sqrt(runs)): %s; one run is worth about %.1f "
+              "independent samples (the runs' own estimates: %.1f)" %
+              (len(means), pooled, min(means), max(means), band[0], band[1],
+               "inside" if inside else "outside", 6.0 / spread if spread > 0 else float("inf"),
+               len(means) / inverse_samples))
         print("Monte Carlo over %d runs: position error mean %.3f m (runs' means), largest %.3f m, "
               "final at most %.3f m" % (len(means), np.mean([e[0] for e in all_errors]),
                                         max(e[1] for e in all_errors),

@@ -10,6 +10,8 @@
 #
 # NAME prefixes the messages and names the launch log (OUT/NAME_launch.log);
 # the monitor writes report.txt, trajectory_*.txt and the rest into OUT.
+# RUN_SAMPLES (optional): what one run of this loop is worth in independent
+# samples, for the NEES band (sim_monitor.py --run-samples).
 # Exit status: the monitor's. Expects the workspace's setup.bash sourced.
 set -euo pipefail
 name=$1 out=$2 world=$3 port=$4
@@ -24,8 +26,8 @@ launch_pid=$!
 cleanup() { kill -INT "$launch_pid" 2>/dev/null || true; wait "$launch_pid" 2>/dev/null || true; }
 trap cleanup EXIT
 status=0
-/usr/bin/python3 "$root/tools/dev/sim_monitor.py" --out "$out" --world "$world" --timeout 900 ||
-  status=$?
+/usr/bin/python3 "$root/tools/dev/sim_monitor.py" --out "$out" --world "$world" --timeout 900 \
+  ${RUN_SAMPLES:+--run-samples "$RUN_SAMPLES"} || status=$?
 if [ $status -ne 0 ]; then
   echo "$name: the run did not complete; the launch log is $log" >&2
   tail -n 30 "$log" >&2
