@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <unordered_set>
 
 namespace ekf_slam {
 
@@ -296,6 +297,22 @@ CorrelativeResult correlativeRunnerUp(const std::vector<Vector2>& points,
                                       double distinct_radius, double min_score) {
   return searchWindow(points, grid, guess, linear_window, angular_window, options, min_score, &best,
                       distinct_radius);
+}
+
+std::vector<Vector2> gridThinned(const std::vector<Vector2>& points, double spacing) {
+  if (!(spacing > 0.0)) return points;
+  std::vector<Vector2> out;
+  std::unordered_set<unsigned long long> seen;
+  for (const Vector2& p : points) {
+    // Cell indices packed into one key (shifted as unsigned: shifting a
+    // negative signed value is undefined).
+    const auto ix =
+        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.x() / spacing)));
+    const auto iy =
+        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.y() / spacing)));
+    if (seen.insert((ix << 32) ^ (iy & 0xffffffffULL)).second) out.push_back(p);
+  }
+  return out;
 }
 
 }  // namespace ekf_slam

@@ -128,4 +128,8 @@ CorrelativeResult correlativeRunnerUp(const std::vector<Vector2>& points,
                                       const CorrelativeMatcherOptions& options, const Pose2& best,
                                       double distinct_radius, double min_score);
 
+// Keeps the first point in each cell of a `spacing` grid (all of them when
+// spacing is not positive): scans of one place merged do not pile up.
+std::vector<Vector2> gridThinned(const std::vector<Vector2>& points, double spacing);
+
 }  // namespace ekf_slam

@@ -36,24 +36,6 @@ std::vector<Vector2> thinned(const std::vector<Vector2>& points, double spacing)
   return out;
 }
 
-// Keeps the first point in each cell of a `spacing` grid: merged scans of
-// one place do not pile up.
-std::vector<Vector2> gridThinned(const std::vector<Vector2>& points, double spacing) {
-  if (!(spacing > 0.0)) return points;
-  std::vector<Vector2> out;
-  std::unordered_set<unsigned long long> seen;
-  for (const Vector2& p : points) {
-    // Cell indices packed into one key (shifted as unsigned: shifting a
-    // negative signed value is undefined).
-    const auto ix =
-        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.x() / spacing)));
-    const auto iy =
-        static_cast<unsigned long long>(static_cast<long long>(std::floor(p.y() / spacing)));
-    if (seen.insert((ix << 32) ^ (iy & 0xffffffffULL)).second) out.push_back(p);
-  }
-  return out;
-}
-
 Matrix3 diagonalInformation(double sigma_translation, double sigma_rotation) {
   const double it = 1.0 / (sigma_translation * sigma_translation);
   return Vector3(it, it, 1.0 / (sigma_rotation * sigma_rotation)).asDiagonal();

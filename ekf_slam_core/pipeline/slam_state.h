@@ -51,6 +51,10 @@ struct BackEndLinkState {
   bool has_map_from_graph = false;
   Pose2 map_from_graph;  // the graph's frame in the map frame
   Pose2 last_front_end;  // the front end's pose at the last scan (the closer's frame)
+  // Set by placeRobot (global_localization.h), never saved: the robot was
+  // moved, so the first new scan hangs at last_front_end whatever frame
+  // the front end goes on in.
+  bool placed = false;
 };
 
 struct SlamState {

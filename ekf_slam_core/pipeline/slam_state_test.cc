@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "ekf_slam_core/io/test_folder.h"
+#include "ekf_slam_core/pipeline/global_localization.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
 #include "ekf_slam_core/sim/drive.h"
 #include "ekf_slam_core/sim/polygon_world.h"
@@ -162,6 +165,73 @@ TEST_F(SlamStateFile, AResumedRunClosesLoopsWithTheSavedKeyScans) {
     EXPECT_LT(resumed_mean, whole_mean + 0.01) << (another_day ? "another day" : "next scan");
     EXPECT_LT(resumed_worst, 0.05);
   }
+}
+
+// Global localisation: another day the robot starts a quarter of the way
+// round the island, not where the first half stopped, with odometry from
+// another origin and nobody saying where it is. Its first scans, searched
+// over the saved map, place it; the run resumed there follows the truth.
+TEST_F(SlamStateFile, ARobotStartedAnywhereIsFoundInTheSavedMapAndMapsOnFromThere) {
+  const Drive drive = islandDrive();
+  SlamState state = firstHalf(drive).state();
+  ASSERT_FALSE(state.back_end.closer.keys.empty());
+  const PipelineOptions options = islandOptions();
+  GlobalLocalizer localizer(state, options.scan_matching, GlobalLocalizationOptions());
+  ASSERT_EQ(localizer.mapError(), "");
+  const size_t from = drive.scans.size() * 3 / 4;  // the first half passed here, 0.75 laps ago
+  const Pose2 origin(-4.0, 7.0, 2.5);
+  auto odometry = [&](size_t i) {
+    return compose(origin, between(drive.odometry[from], drive.odometry[i]));
+  };
+  GlobalPlacement placement;
+  size_t found = from;
+  for (; found < drive.scans.size() && !placement.found; ++found) {
+    placement = localizer.add(
+        scanPointsInRobotFrame(drive.scans[found], kLaser, options.scan_matching), odometry(found));
+  }
+  --found;
+  ASSERT_TRUE(placement.found) << placement.message;
+  // The map frame: the robot's start in the first half.
+  const Pose2 truth = between(drive.truth[0], drive.truth[found]);
+  std::cout << "found after " << found - from + 1 << " scans (" << placement.joined_scans
+            << " joined), score " << placement.score << ", runner-up " << placement.runner_up
+            << "; off by " << (placement.map_pose.translation() - truth.translation()).norm()
+            << " m, " << radToDeg(std::abs(wrapAngle(placement.map_pose.theta - truth.theta)))
+            << " deg\n";
+  EXPECT_LE(found - from, 20u);
+  EXPECT_LT((placement.map_pose.translation() - truth.translation()).norm(), 0.05);
+  EXPECT_LT(std::abs(wrapAngle(placement.map_pose.theta - truth.theta)), degToRad(1.0));
+
+  EXPECT_TRUE(placement.has_front_end_pose);
+  placeRobot(placement, Vector3(0.05 * 0.05, 0.05 * 0.05, 0.02 * 0.02).asDiagonal(), &state);
+  SlamPipeline resumed(options);
+  ASSERT_EQ(resumed.resume(state), "");
+  for (size_t i = found; i < drive.scans.size(); ++i) {
+    Scan scan = drive.scans[i];
+    scan.stamp += 86400.0;
+    resumed.processScan(scan, odometry(i));
+  }
+  const std::vector<StampedPose> causal = resumed.causalScanPoses();
+  ASSERT_EQ(causal.size(), drive.scans.size() - found);
+  double sum = 0.0, worst = 0.0;
+  for (size_t k = 0; k < causal.size(); ++k) {
+    const Pose2 t = between(drive.truth[0], drive.truth[found + k]);
+    const double e = (causal[k].pose.translation() - t.translation()).norm();
+    sum += e;
+    worst = std::max(worst, e);
+  }
+  std::cout << "placed and resumed: causal error " << sum / causal.size() << " m mean, largest "
+            << worst << " m over " << causal.size() << " scans; loops "
+            << resumed.backEndCounters().accepted << "\n";
+  EXPECT_LT(sum / causal.size(), 0.05);
+  EXPECT_LT(worst, 0.1);
+
+  // Without key scans (loop closure off) there is nothing to search.
+  PipelineOptions no_loops = islandOptions();
+  no_loops.loop_closure.enabled = false;
+  const GlobalLocalizer blind(firstHalf(drive, no_loops).state(), options.scan_matching,
+                              GlobalLocalizationOptions());
+  EXPECT_NE(blind.mapError().find("no key scans"), std::string::npos) << blind.mapError();
 }
 
 TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {

@@ -7,7 +7,8 @@
 //                                    [--config YAML] [--preset NAME] [--max-scans N] [--first-scan
 //                                    N]
 //                                    [--no-figures] [--trace] [--export-graphs DIR]
-//                                    [--save-state FILE] [--resume FILE [--localize-only]]
+//                                    [--save-state FILE] [--resume FILE [--localize-only]
+//                                    [--global]]
 //
 // Writes into DIR: trajectory_filtered.txt, trajectory_smoothed.txt (the full
 // smoother: batch MAP over every pose, landmark and observation the filter
@@ -26,7 +27,9 @@
 // anchors that turn a solution into one pose per scan (as trajectory_optimized.txt and
 // trajectory_smoothed.txt are made from the run's own solutions). --save-state FILE writes the
 // SLAM state after the last scan (before the final optimisation), --resume FILE goes on from one
-// (ekf_slam_core/pipeline/slam_state.h): a log mapped in parts, a building mapped over days.
+// (ekf_slam_core/pipeline/slam_state.h): a log mapped in parts, a building mapped over days;
+// with --global the robot is first found in the saved map from the log's first scans
+// (ekf_slam_core/pipeline/global_localization.h), wherever it starts.
 // Exit code 0 on success, 1 on bad arguments or configuration, 2 on unreadable input (a state
 // that cannot be resumed included), 3 when the output cannot be written.
 #include <sys/resource.h>
@@ -51,6 +54,7 @@
 #include "ekf_slam_core/io/atomic_file.h"
 #include "ekf_slam_core/io/landmark_map.h"
 #include "ekf_slam_core/io/trajectory_file.h"
+#include "ekf_slam_core/pipeline/global_localization.h"
 #include "ekf_slam_core/pipeline/map_file_conversion.h"
 #include "ekf_slam_core/pipeline/slam_state.h"
 #include "ekf_slam_core/pose_graph/graph_io.h"
@@ -76,7 +80,7 @@ void usage(std::ostream& out = std::cerr) {
          "                        [--preset NAME] [--max-scans N] [--first-scan N] [--no-figures] "
          "[--no-maps]\n"
          "                        [--trace] [--export-graphs DIR] [--save-state FILE]\n"
-         "                        [--resume FILE [--localize-only]]\n"
+         "                        [--resume FILE [--localize-only] [--global]]\n"
          "       ekf_slam_offline [--config YAML] [--preset NAME] --print-config\n"
          "       ekf_slam_offline --help\n"
          "  --config: overrides of the built-in defaults (config/ekf_slam.yaml holds them)\n"
@@ -91,7 +95,10 @@ void usage(std::ostream& out = std::cerr) {
          "  --save-state: the SLAM state after the last scan, to go on from with --resume\n"
          "  --resume: go on mapping from a saved state (the log's first scan is taken\n"
          "             where the saved run stopped)\n"
-         "  --localize-only: with --resume, no landmark is added: the saved map localises\n";
+         "  --localize-only: with --resume, no landmark is added: the saved map localises\n"
+         "  --global: with --resume, the robot need not start where the saved run stopped:\n"
+         "             the log's first scans are searched for in the saved map, and the\n"
+         "             scans before the robot is found are left out\n";
 }
 
 void progress(size_t done, size_t total, int landmarks, double seconds, bool tty) {
@@ -292,6 +299,7 @@ struct Arguments {
   bool trace = false;
   bool print_config = false;
   bool localize_only = false;
+  bool global = false;
 };
 
 // Returns -1 to go on, else the exit code.
@@ -320,6 +328,8 @@ int parseArguments(int argc, char** argv, Arguments* a) {
       a->resume = argv[++i];
     } else if (arg == "--localize-only") {
       a->localize_only = true;
+    } else if (arg == "--global") {
+      a->global = true;
     } else if (arg == "--no-figures") {
       a->figures = false;
     } else if (arg == "--no-maps") {
@@ -343,8 +353,9 @@ int parseArguments(int argc, char** argv, Arguments* a) {
     usage();
     return 1;
   }
-  if (a->localize_only && a->resume.empty()) {
-    std::cerr << "ekf_slam_offline: --localize-only needs a map to localise in: --resume FILE\n";
+  if ((a->localize_only || a->global) && a->resume.empty()) {
+    std::cerr << "ekf_slam_offline: --" << (a->global ? "global" : "localize-only")
+              << " needs a map to localise in: --resume FILE\n";
     return 1;
   }
   return -1;
@@ -421,6 +432,52 @@ void traceScan(double stamp, const ekf_slam::ScanResult& result, std::ofstream* 
 // With --save-state the state is written after the last scan, before that
 // optimisation (a later run goes on from the run as it stood): the problem
 // when it cannot be, else empty.
+// --global: the log's first scans searched for in the saved map, one more
+// joined at a time, until the robot is found (at most kGlobalScans); the
+// state's robot is moved there and the scans before it are left out.
+// `line` receives the report's line. Returns "" or why the robot was not
+// found.
+constexpr size_t kGlobalScans = 200;
+
+std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamState* state,
+                          ekf_slam::LogData* log, std::string* line) {
+  ekf_slam::GlobalLocalizer localizer(*state, config.pipeline.scan_matching,
+                                      ekf_slam::GlobalLocalizationOptions());
+  if (!localizer.mapError().empty()) return localizer.mapError();
+  ekf_slam::GlobalPlacement placement;
+  size_t found = 0;
+  for (; found < std::min(log->scans.size(), kGlobalScans); ++found) {
+    const ekf_slam::LoggedScan& s = log->scans[found];
+    placement =
+        localizer.add(ekf_slam::scanPointsInRobotFrame(s.scan, config.pipeline.filter.laser_pose,
+                                                       config.pipeline.scan_matching),
+                      s.odometry);
+    if (placement.found) break;
+    if (placement.message.rfind("waiting", 0) != 0) {
+      std::cerr << "global localisation, scan " << found + 1 << ": " << placement.message << "\n";
+    }
+  }
+  if (!placement.found) {
+    return "not found in the first " + std::to_string(found) +
+           " scans (the last: " + placement.message + ")";
+  }
+  // Placed as well as a scan match places it: 5 cm, 1°.
+  const double sd = 0.05, sa = ekf_slam::degToRad(1.0);
+  ekf_slam::placeRobot(placement, ekf_slam::Vector3(sd * sd, sd * sd, sa * sa).asDiagonal(), state);
+  std::ostringstream text;
+  text.setf(std::ios::fixed);
+  text.precision(3);
+  text << "global localisation: found at the log's scan " << found + 1 << " ("
+       << log->scans[found].scan.stamp - log->scans.front().scan.stamp << " s after its first, "
+       << placement.joined_scans << " scans joined), at " << placement.map_pose.x << " "
+       << placement.map_pose.y << " " << placement.map_pose.theta << ", score " << placement.score
+       << ", no other place above " << ekf_slam::GlobalLocalizationOptions().max_runner_up_ratio
+       << " of it";
+  *line = text.str();
+  log->scans.erase(log->scans.begin(), log->scans.begin() + static_cast<long>(found));
+  return "";
+}
+
 std::string runSlam(const Arguments& a, const ekf_slam::SlamConfig& config,
                     const ekf_slam::LogData& log, std::chrono::steady_clock::time_point wall_start,
                     ekf_slam::SlamPipeline* pipeline) {
@@ -720,9 +777,14 @@ int main(int argc, char** argv) {
     return 3;
   }
   ekf_slam::SlamPipeline pipeline(config.pipeline);
+  std::string global_line;
   if (!args.resume.empty()) {
     ekf_slam::SlamState state;
     std::string error = ekf_slam::readSlamState(args.resume, &state);
+    if (error.empty() && args.global) {
+      error = placeGlobally(config, &state, &log, &global_line);
+      if (!error.empty()) error = "global localisation in " + args.resume + ": " + error;
+    }
     if (error.empty()) {
       error = pipeline.resume(state);
       if (!error.empty()) error = args.resume + ": " + error;
@@ -755,6 +817,7 @@ int main(int argc, char** argv) {
   report.setf(std::ios::fixed);
   report.precision(3);
   reportInput(args, config, log, report);
+  if (!global_line.empty()) report << global_line << "\n";
   reportFrontAndBackEnd(config, pipeline, report);
   reportLandmarks(config, pipeline, report);
   reportSmoother(trajectories, config.pipeline.smoother.method, report);

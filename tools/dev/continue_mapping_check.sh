@@ -6,8 +6,9 @@
 # publishes; final: the full smoother), against the log's ground-truth
 # relations. The second half is also localised in the first half's state
 # with mapping off (--localize-only; the robot starts where the first half
-# stopped, its true start pose): its causal error against the same half of
-# the one run.
+# stopped, its true start pose), and again with no start pose (--global: it
+# is found in the saved map from its first scans): their causal errors
+# against the same half of the one run, and the scans the global start took.
 #   tools/dev/continue_mapping_check.sh DEVEL_DIR [OUT_DIR]
 # DATASETS="intel aces" by default; results in OUT_DIR (default
 # output/continue_mapping/): continue_mapping.md, and per log the runs'
@@ -26,8 +27,8 @@ fi
 mkdir -p "$out"
 table=$out/continue_mapping.md
 {
-  echo "| log | scans (first half) | causal: one run [m] | causal: two halves [m] | final: one run [m] | final: two halves [m] | loops: first half, at the end | second half causal: one run / localised [m] |"
-  echo "|---|---|---|---|---|---|---|---|"
+  echo "| log | scans (first half) | causal: one run [m] | causal: two halves [m] | final: one run [m] | final: two halves [m] | loops: first half, at the end | second half causal: one run / localised / global [m] | global start found at scan |"
+  echo "|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 
 mean() {  # relations trajectory -> mean translation error (m) over the relations it holds
@@ -55,6 +56,9 @@ for name in ${DATASETS:-intel aces}; do
   echo "== $name: the rest, localised in the first half's state"
   "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/localised" --no-maps --first-scan "$half" \
     --resume "$dir/first.state" --localize-only > "$dir/localised.log" 2>&1
+  echo "== $name: the rest, localised with no start pose"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/global" --no-maps --first-scan "$half" \
+    --resume "$dir/first.state" --localize-only --global > "$dir/global.log" 2>&1 || true
   loops_first=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/first/report.txt" | head -n 1)
   loops_second=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/second/report.txt" | head -n 1)
   row="| $name | $half |"
@@ -73,7 +77,14 @@ for name in ${DATASETS:-intel aces}; do
   awk -v t="$start" '/^#/ || $1 >= t' "$dir/whole/trajectory_live.txt" > "$dir/whole_second_half_live.txt"
   one_half=$(mean "$relations" "$dir/whole_second_half_live.txt")
   localised=$(mean "$relations" "$dir/localised/trajectory_live.txt")
-  echo "$row ${loops_first:-?}, ${loops_second:-?} | $one_half / $localised |" >> "$table"
+  if [ -f "$dir/global/report.txt" ]; then
+    global=$(mean "$relations" "$dir/global/trajectory_live.txt")
+    found=$(sed -n 's/^global localisation: found at the log.s scan \([0-9]*\) .*/\1/p' "$dir/global/report.txt")
+  else
+    global="not found"
+    found="- ($(tail -n 1 "$dir/global.log"))"
+  fi
+  echo "$row ${loops_first:-?}, ${loops_second:-?} | $one_half / $localised / $global | $found |" >> "$table"
 done
 echo
 cat "$table"
