@@ -41,6 +41,7 @@ GlobalLocalizer::GlobalLocalizer(const SlamState& state, const ScanMatcherOption
     map_error_ = "the saved map is too large for one search grid";
     return;
   }
+  map_reference_.emplace(map_points_, icp_.normal_radius, icp_.initial_correspondence_distance);
   const Vector2 low = grid_.lowerCorner(), high = grid_.upperCorner();
   centre_ = Pose2(0.5 * (low.x() + high.x()), 0.5 * (low.y() + high.y()), 0.0);
   radius_ = 0.5 * (high - low).norm();
@@ -74,8 +75,8 @@ GlobalPlacement GlobalLocalizer::add(const std::vector<Vector2>& robot_points,
   last_search_ = odometry;
   std::vector<Vector2> query;
   for (const Joined& j : joined_) {
-    const Pose2 placement = between(odometry, j.odometry);
-    for (const Vector2& p : j.points) query.push_back(transformFrom(placement, p));
+    const Pose2 offset = between(odometry, j.odometry);
+    for (const Vector2& p : j.points) query.push_back(transformFrom(offset, p));
   }
   placement = search(gridThinned(query, icp_.min_point_spacing));
   placement.joined_scans = static_cast<int>(joined_.size());
@@ -104,9 +105,7 @@ GlobalPlacement GlobalLocalizer::search(const std::vector<Vector2>& query) const
     out.message = why.str();
     return out;
   }
-  const PointCloudReference reference(map_points_, icp_.normal_radius,
-                                      icp_.initial_correspondence_distance);
-  const MatchResult fine = matchPoints(query, reference, best.pose, icp_);
+  const MatchResult fine = matchPoints(query, *map_reference_, best.pose, icp_);
   const Pose2 shift = between(best.pose, fine.pose);
   if (!fine.ok || fine.inlier_fraction < options_.min_inlier_fraction ||
       fine.rms_residual > options_.max_rms_residual ||

@@ -112,6 +112,7 @@ class GlobalLocalizer {
   Pose2 map_from_graph_;
   LikelihoodGrid grid_;
   std::vector<Vector2> map_points_;
+  std::optional<PointCloudReference> map_reference_;  // the map's points for ICP
   std::optional<PointCloudReference> front_end_map_;
   std::vector<Pose2> key_graph_, key_front_end_;
   Pose2 centre_;       // the grid's centre (the search's guess)
