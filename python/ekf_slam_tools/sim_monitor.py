@@ -427,7 +427,7 @@ def run(args):
     recorder.done = True
     landmarks = recorder.finish(args.out)
     result = score(recorder.truth, recorder.slam, recorder.odom, landmarks,
-                   world_vertices(args.world), args.run_samples)
+                   world_vertices(args.world), getattr(args, "run_samples", None))
     result["ended_early"] = ended_early
     result["live_map"] = live_map
     world_yaml = os.path.join(rospkg.RosPack().get_path("ekf_slam"), "config", "worlds",
