@@ -85,6 +85,7 @@ GlobalPlacement GlobalLocalizer::add(const std::vector<Vector2>& robot_points,
 
 GlobalPlacement GlobalLocalizer::search(const std::vector<Vector2>& query) const {
   GlobalPlacement out;
+  out.searched = true;
   std::ostringstream why;
   why.precision(3);
   if (!map_error_.empty()) {

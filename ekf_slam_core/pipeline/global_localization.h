@@ -70,6 +70,7 @@ struct GlobalLocalizationOptions {
 
 // Where the robot was found (or why not yet).
 struct GlobalPlacement {
+  bool searched = false;  // false: no search at this scan (waiting to move on)
   bool found = false;
   Pose2 graph_pose;  // the newest scan's robot pose in the saved graph's frame
   Pose2 map_pose;    // the same in the map frame

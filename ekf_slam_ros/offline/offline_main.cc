@@ -445,6 +445,7 @@ std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamStat
                                       ekf_slam::GlobalLocalizationOptions());
   if (!localizer.mapError().empty()) return localizer.mapError();
   ekf_slam::GlobalPlacement placement;
+  std::string last_reason = "no scan";  // of the last search
   size_t found = 0;
   for (; found < std::min(log->scans.size(), kGlobalScans); ++found) {
     const ekf_slam::LoggedScan& s = log->scans[found];
@@ -453,13 +454,14 @@ std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamStat
                                                        config.pipeline.scan_matching),
                       s.odometry);
     if (placement.found) break;
-    if (placement.message.rfind("waiting", 0) != 0) {
-      std::cerr << "global localisation, scan " << found + 1 << ": " << placement.message << "\n";
+    if (placement.searched) {
+      last_reason = placement.message;
+      std::cerr << "global localisation, scan " << found + 1 << ": " << last_reason << "\n";
     }
   }
   if (!placement.found) {
     return "not found in the first " + std::to_string(found) +
-           " scans (the last: " + placement.message + ")";
+           " scans (the last search: " + last_reason + ")";
   }
   // Placed as well as a scan match places it: 5 cm, 1°.
   const double sd = 0.05, sa = ekf_slam::degToRad(1.0);
