@@ -20,6 +20,40 @@ struct Pairing {
   double normalised;
 };
 
+// Joint d² = νᵀ S⁻¹ ν of the pairings observation obs[a] ↔ landmark slot
+// slots[a], with `predictions` indexed by slot; +inf when S is not PD.
+double jointDistance(const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                     const std::vector<EkfSlam::Prediction>& predictions,
+                     const std::vector<int>& obs, const std::vector<int>& slots) {
+  const int p = static_cast<int>(obs.size());
+  if (p == 0) return 0.0;
+  const Matrix3 P_rr = filter.poseCovariance();
+  Eigen::MatrixXd S(2 * p, 2 * p);
+  Eigen::VectorXd nu(2 * p);
+  for (int a = 0; a < p; ++a) {
+    const int sa = slots[a];
+    const EkfSlam::Prediction& pa = predictions[sa];
+    const PointObservation& oa = observations[obs[a]];
+    nu(2 * a) = oa.z.range - pa.z.range;
+    nu(2 * a + 1) = wrapAngle(oa.z.bearing - pa.z.bearing);
+    for (int b = 0; b <= a; ++b) {
+      const int sb = slots[b];
+      const EkfSlam::Prediction& pb = predictions[sb];
+      Matrix2 block =
+          pa.H_robot * P_rr * pb.H_robot.transpose() +
+          pa.H_robot * filter.poseLandmarkCovariance(sb) * pb.H_landmark.transpose() +
+          pa.H_landmark * filter.poseLandmarkCovariance(sa).transpose() * pb.H_robot.transpose() +
+          pa.H_landmark * filter.landmarkCrossCovariance(sa, sb) * pb.H_landmark.transpose();
+      if (a == b) block += oa.covariance;
+      S.block<2, 2>(2 * a, 2 * b) = block;
+      S.block<2, 2>(2 * b, 2 * a) = block.transpose();
+    }
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) return kInfinity;
+  return llt.matrixL().solve(nu).squaredNorm();
+}
+
 // Everything JCBB needs to build joint innovations without recomputing the
 // per-landmark predictions.
 class JointCompatibility {
@@ -56,38 +90,14 @@ class JointCompatibility {
  private:
   // Joint d² of the pairings in `current_`; +inf when S is not PD.
   double jointDistance() const {
-    std::vector<int> obs;
+    std::vector<int> obs, slots;
     for (size_t i = 0; i < current_.size(); ++i) {
-      if (current_[i] >= 0) obs.push_back(static_cast<int>(i));
-    }
-    const int p = static_cast<int>(obs.size());
-    if (p == 0) return 0.0;
-    const Matrix3 P_rr = filter_.poseCovariance();
-    Eigen::MatrixXd S(2 * p, 2 * p);
-    Eigen::VectorXd nu(2 * p);
-    for (int a = 0; a < p; ++a) {
-      const int sa = current_[obs[a]];
-      const EkfSlam::Prediction& pa = predictions_[sa];
-      const PointObservation& oa = observations_[obs[a]];
-      nu(2 * a) = oa.z.range - pa.z.range;
-      nu(2 * a + 1) = wrapAngle(oa.z.bearing - pa.z.bearing);
-      for (int b = 0; b <= a; ++b) {
-        const int sb = current_[obs[b]];
-        const EkfSlam::Prediction& pb = predictions_[sb];
-        Matrix2 block =
-            pa.H_robot * P_rr * pb.H_robot.transpose() +
-            pa.H_robot * filter_.poseLandmarkCovariance(sb) * pb.H_landmark.transpose() +
-            pa.H_landmark * filter_.poseLandmarkCovariance(sa).transpose() *
-                pb.H_robot.transpose() +
-            pa.H_landmark * filter_.landmarkCrossCovariance(sa, sb) * pb.H_landmark.transpose();
-        if (a == b) block += oa.covariance;
-        S.block<2, 2>(2 * a, 2 * b) = block;
-        S.block<2, 2>(2 * b, 2 * a) = block.transpose();
+      if (current_[i] >= 0) {
+        obs.push_back(static_cast<int>(i));
+        slots.push_back(current_[i]);
       }
     }
-    const Eigen::LLT<Eigen::MatrixXd> llt(S);
-    if (llt.info() != Eigen::Success) return kInfinity;
-    return llt.matrixL().solve(nu).squaredNorm();
+    return ekf_slam::jointDistance(filter_, observations_, predictions_, obs, slots);
   }
 
   void recurse(int depth, int pairings) {
@@ -180,6 +190,22 @@ std::vector<int> AssociationResult::newLandmarks() const {
     }
   }
   return out;
+}
+
+double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                         const std::vector<PointMatch>& pairings) {
+  std::vector<EkfSlam::Prediction> predictions(filter.landmarkCount());
+  std::vector<int> obs, slots;
+  for (const PointMatch& pairing : pairings) {
+    const int slot = filter.slotOf(pairing.landmark_id);
+    if (pairing.observation < 0 || pairing.observation >= static_cast<int>(observations.size()) ||
+        slot < 0 || !filter.predictObservation(slot, &predictions[slot])) {
+      return kInfinity;
+    }
+    obs.push_back(pairing.observation);
+    slots.push_back(slot);
+  }
+  return jointDistance(filter, observations, predictions, obs, slots);
 }
 
 AssociationResult associate(const EkfSlam& filter,

@@ -94,6 +94,13 @@ struct AssociationResult {
   std::vector<int> newLandmarks() const;  // observation indices
 };
 
+// The joint squared Mahalanobis distance νᵀ S⁻¹ ν of several pairings at
+// once (the stacked innovation and its full covariance, as JCBB tests
+// them); +inf when a pairing names a missing observation or landmark, a
+// landmark cannot be predicted, or S is not positive definite. 0 for none.
+double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                         const std::vector<PointMatch>& pairings);
+
 AssociationResult associate(const EkfSlam& filter,
                             const std::vector<PointObservation>& observations,
                             const AssociationOptions& options);
