@@ -12,8 +12,9 @@ Checks, on a real roscore with real pseudo-terminals:
     safety gate), ekf_slam_node merges rear scans into its scans
     (/diagnostics: merged scans, no rear scan refused), the filter sees
     landmarks behind the robot (association reports in base_link with
-    bearings beyond 100 degrees), the MECP update applies (MECP updates > 0:
-    the landmarks now enclose the robot), and the SLAM pose stays near the
+    bearings beyond 100 degrees), the MECP association matches a polygon
+    round the robot to one it remembered (MECP group matches > 0: the
+    landmarks now enclose the robot), and the SLAM pose stays near the
     true pose.
 """
 import math
@@ -171,24 +172,23 @@ class SimRearLaserTest(unittest.TestCase):
         self.assertGreaterEqual(checked, 3, "rear scan stamps must fall inside the truth history")
 
         # The node merged, the filter saw landmarks behind the robot, and
-        # the MECP applied.
+        # the MECP association matched polygons round the robot.
         merged = listener.counter("scans merged with a rear scan")
         alone = ((listener.counter("scans without the rear laser: none within "
                                    "rear_scan_tolerance") or 0)
                  + (listener.counter("scans without the rear laser: rear transforms missing")
                     or 0))
-        mecp = listener.counter("MECP updates")
-        rospy.loginfo("merged %s scans, %d without the rear laser; MECP updates %s, %s without "
-                      "a polygon; %d matches behind the robot; counters %r", merged, alone, mecp,
-                      listener.slam.get("MECP: no polygon around the robot"), listener.behind,
-                      listener.slam)
+        mecp = listener.counter("MECP group matches")
+        rospy.loginfo("merged %s scans, %d without the rear laser; MECP polygons %s, group "
+                      "matches %s; %d matches behind the robot; counters %r", merged, alone,
+                      listener.slam.get("MECP polygons"), mecp, listener.behind, listener.slam)
         self.assertGreater(merged, 20)
         self.assertEqual(listener.counter("rear scans refused"), 0)
         self.assertEqual(listener.association_frames, {"base_link"},
                          "observations of the merged scan are in base_link")
         self.assertGreater(listener.behind, 0, "no landmark matched behind the robot")
         self.assertIsNotNone(mecp, "MECP counters missing on /diagnostics: %r" % listener.slam)
-        self.assertGreater(mecp, 0, "the MECP update never applied")
+        self.assertGreater(mecp, 0, "no polygon round the robot was ever matched again")
 
         # The estimate is still right: the last pose against the truth at
         # its stamp, both in the map frame (the start pose).

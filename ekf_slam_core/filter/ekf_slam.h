@@ -6,8 +6,7 @@
 //
 // The state is a value (FilterState, filter_state.h: the mean, the
 // covariance, the landmarks' bookkeeping, and its layout). This class runs
-// the filter on it: prediction, point updates and augmentation, updates
-// from outside models (updateGeneric). Line landmarks
+// the filter on it: prediction, point updates and augmentation. Line landmarks
 // (line_landmark_update.h) and the map's upkeep (map_maintenance.h) are
 // units of their own acting on the same state; the members below that
 // name them hand over to those units.
@@ -100,18 +99,6 @@ struct PointMatch {
   int landmark_id = -1;
 };
 
-// An observation z = h(x_r, m_a, m_b, …) of dimension d, linearised by
-// the caller at the current estimate: the filter applies the EKF update
-// with H = [J_z_pose, 0 …, J_z_landmarks[0] at m_a's columns, …] and
-// innovation ν = z − h(x̂) (angles already wrapped by the caller).
-struct GenericObservation {
-  Eigen::VectorXd innovation;                  // d
-  Eigen::MatrixXd J_z_pose;                    // d × kPoseDim
-  std::vector<int> landmark_ids;               // each at most once
-  std::vector<Eigen::MatrixXd> J_z_landmarks;  // d × landmarkDim(kind), one per id
-  Eigen::MatrixXd noise;                       // d × d, symmetric, the observation's R
-};
-
 class EkfSlam {
  public:
   static constexpr int kPoseDim = FilterState::kPoseDim;
@@ -178,14 +165,6 @@ class EkfSlam {
   // robot's rows.
   FilterStatus augmentLine(const LineObservation& observation, LandmarkKind kind,
                            int* new_id = nullptr);
-  // Update with one linearised observation of the pose and some landmarks
-  // that no other entry point models, e.g. the centre of an MECP's members
-  // (thesis §4.4.3). Defined in generic_update.cc; see GenericObservation.
-  // Checked before the state is touched: kUnknownLandmark for a missing
-  // id, kBadObservation for a repeated id or mismatched sizes,
-  // kNonFiniteInput, kSingularInnovation when S is not positive definite.
-  // `nis` (if given) receives νᵀ S⁻¹ ν.
-  FilterStatus updateGeneric(const GenericObservation& observation, double* nis = nullptr);
   // The line landmark in `slot` (kLine) or its direction (kLineAngle).
   PolarLine lineLandmark(int slot) const;
   double lineAngle(int slot) const { return state_.x(landmarkIndex(slot)); }

@@ -3,8 +3,6 @@
 #include <iterator>
 #include <string>
 
-#include "ekf_slam_core/mecp/mecp_update.h"
-
 namespace ekf_slam {
 
 Associator RoomGatingStrategy::associator() const {
@@ -57,32 +55,6 @@ void RoomGatingStrategy::rebuild(const EkfSlam& filter, const LineLandmarks& lin
   gate_.emplace(std::move(rooms), doorways, options_.gate);
   for (const auto& [id, seen_from] : seen_from_) {
     gate_->labelLandmark(id, filter.landmarkPosition(filter.slotOf(id)), seen_from);
-  }
-}
-
-void MecpStrategy::update(EkfSlam* filter, const std::vector<PointObservation>& observations,
-                          const IterationReport& report) {
-  // Per point observation, the landmark it was matched to or made into,
-  // following this scan's merges.
-  std::vector<int> ids(observations.size(), -1);
-  for (const PointMatch& m : report.matches) ids[m.observation] = m.landmark_id;
-  for (const PointMatch& m : report.created) ids[m.observation] = m.landmark_id;
-  for (const auto& [kept, dropped] : report.merged) {
-    for (int& id : ids) {
-      if (id == dropped) id = kept;
-    }
-  }
-  switch (updateWithMecp(filter, observations, ids).outcome) {
-    case MecpOutcome::kApplied:
-      ++counters_.mecp_updates;
-      break;
-    case MecpOutcome::kNoPolygon:
-      ++counters_.mecp_without_polygon;
-      break;
-    case MecpOutcome::kNearCentre:
-    case MecpOutcome::kFilterRefused:
-      ++counters_.mecp_skipped;
-      break;
   }
 }
 

@@ -1,8 +1,7 @@
 // Strategies of the filter stage (LocalFilter) beside the point landmarks:
-//   RoomGatingStrategy  the point association gated by rooms (thesis §4.4.5);
-//   MecpStrategy        the MECP of each scan's matched points as an extra
-//                       update (thesis §4.4, landmarks: points+mecp).
-// The third, wall lines as landmarks, is LineLandmarks (line_landmarks.h).
+//   RoomGatingStrategy  the point association gated by rooms (thesis §4.4.5).
+// The others are wall lines as landmarks, LineLandmarks (line_landmarks.h),
+// and the MECP association (mecp/mecp_association.h, landmarks: points+mecp).
 #pragma once
 
 #include <optional>
@@ -53,25 +52,6 @@ class RoomGatingStrategy {
   long iterations_since_rebuild_ = 0;
   std::unordered_map<int, Vector2> seen_from_;  // per point landmark id, where the laser was
   RoomCounters counters_;
-};
-
-struct MecpCounters {
-  long mecp_updates = 0;          // points+mecp: scans whose MECP updated the filter
-  long mecp_without_polygon = 0;  // … whose matched points enclose the robot in none
-  long mecp_skipped = 0;          // … whose centre lay too near, or the update was refused
-};
-
-// The MECP of the scan's matched point landmarks as an extra update
-// (mecp/mecp_update.h), counted.
-class MecpStrategy {
- public:
-  // `observations` and `report` of the point update just made.
-  void update(EkfSlam* filter, const std::vector<PointObservation>& observations,
-              const IterationReport& report);
-  const MecpCounters& counters() const { return counters_; }
-
- private:
-  MecpCounters counters_;
 };
 
 }  // namespace ekf_slam

@@ -47,7 +47,7 @@ enum class LandmarkSet {
   kPoints,               // corners and segment ends only (the thesis's §4.2)
   kPointsAndLines,       // + (p, θ) line landmarks
   kPointsAndLineAngles,  // + θ-only line landmarks with endpoint points
-  kPointsAndMecp,        // + the MECP of each scan's matched points as an extra update (§4.4)
+  kPointsAndMecp,        // points, each scan's MECP associated as a group (§4.4.3)
 };
 const char* toString(LandmarkSet set);
 

@@ -64,8 +64,16 @@ void LocalFilter::update(ScanResult* out) {
     out->observation_feature.push_back(i);
   }
   out->iteration.predict_status = FilterStatus::kOk;
-  observe(filter_, options_.association, out->observations, &out->iteration,
-          rooms_ ? rooms_->associator() : nullptr);
+  Associator associator = rooms_ ? rooms_->associator() : nullptr;
+  if (mecp_) {
+    associator = [this, base = std::move(associator)](
+                     const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                     const AssociationOptions& association) {
+      return mecp_->associate(filter, observations, association, base);
+    };
+  }
+  observe(filter_, options_.association, out->observations, &out->iteration, associator);
+  if (mecp_) mecp_->remember(filter_, out->iteration);
   if (rooms_) {
     const Vector2 laser = compose(filter_.pose(), options_.filter.laser_pose).translation();
     rooms_->labelNew(filter_, out->iteration, laser);
@@ -73,7 +81,6 @@ void LocalFilter::update(ScanResult* out) {
   if (lines_) {
     lines_->observe(filter_, out->features, out->observation_feature, out->iteration, &out->lines);
   }
-  if (mecp_) mecp_->update(&filter_, out->observations, out->iteration);
 }
 
 void LocalFilter::maintain(const ScanResult& result) {

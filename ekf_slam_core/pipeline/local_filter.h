@@ -1,6 +1,6 @@
 // The pipeline's filter stage: the EKF (thesis Ch. 2–3) over the robot's
 // pose and the landmarks, with its strategies beside the point landmarks
-// (wall lines, MECP, room gating) and the map's maintenance (landmarks
+// (wall lines, MECP association, room gating) and the map's maintenance (landmarks
 // seen too rarely are pruned; beyond max_landmarks the least recently
 // matched are marginalised out). The coordinator predicts with the front
 // end's control, then hands each iterated scan's features to update() and,
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ekf_slam_core/filter/ekf_slam.h"
+#include "ekf_slam_core/mecp/mecp_association.h"
 #include "ekf_slam_core/pipeline/filter_strategies.h"
 #include "ekf_slam_core/pipeline/line_landmarks.h"
 #include "ekf_slam_core/pipeline/pipeline_options.h"
@@ -58,8 +59,9 @@ class LocalFilter {
   }
   // The observation half of an iteration on out->features: the point
   // landmark candidates within range are associated (gated by rooms when
-  // on), used in one update and the new ones augmented; then the lines or
-  // the MECP. Fills out->observations, observation_feature, iteration, lines.
+  // on, and each scan's polygon by MECP with points+mecp), used in one
+  // update and the new ones augmented; then the lines. Fills out->observations,
+  // observation_feature, iteration, lines.
   void update(ScanResult* out);
   // After the history recorded the iteration: the counts, the map's
   // maintenance, and the strategies' upkeep (line extents, rooms).
@@ -90,7 +92,7 @@ class LocalFilter {
   PipelineOptions options_;
   EkfSlam filter_;
   std::optional<LineLandmarks> lines_;       // none with points only
-  std::optional<MecpStrategy> mecp_;         // landmarks: points+mecp
+  std::optional<MecpAssociation> mecp_;      // landmarks: points+mecp
   std::optional<RoomGatingStrategy> rooms_;  // rooms.enabled
   PointCounters points_;
   LineCounters lines_counted_;

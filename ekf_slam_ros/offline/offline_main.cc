@@ -685,12 +685,13 @@ void reportLandmarks(const ekf_slam::SlamConfig& config, const ekf_slam::SlamPip
                        std::to_string(c.line_matches ? c.line_nis_sum / c.line_matches : 0.0) +
                        ", in the map: " + std::to_string(pipeline.lineSupport().size()))
          << "\n"
-         << "MECP updates (points+mecp): "
+         << "MECP association (points+mecp): "
          << (set == ekf_slam::LandmarkSet::kPointsAndMecp
-                 ? std::to_string(c.mecp_updates) + " applied, " +
-                       std::to_string(c.mecp_without_polygon) +
-                       " scans without a polygon around the robot, " +
-                       std::to_string(c.mecp_skipped) + " skipped (centre too near, or refused)"
+                 ? std::to_string(c.mecp_polygons) + " scans with a polygon round the robot, " +
+                       std::to_string(c.mecp_group_matches) + " matched to one remembered (" +
+                       std::to_string(c.mecp_pairings_changed) + " pairings changed), " +
+                       std::to_string(c.mecp_group_refused) + " refused by the group gate, " +
+                       std::to_string(c.mecp_remembered) + " remembered"
                  : std::string("off"))
          << "\n"
          << "room gating (rooms.enabled): "

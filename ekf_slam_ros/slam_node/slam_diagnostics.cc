@@ -69,9 +69,11 @@ void SlamDiagnostics::diagnose(DiagnosticStatusWrapper& status) {
   addScanMatching(counters, status);
   if (pipeline && loop_closure_) addBackEnd(counters, status);
   if (mecp_) {
-    status.add("MECP updates", counters.mecp_updates);
-    status.add("MECP: no polygon around the robot", counters.mecp_without_polygon);
-    status.add("MECP: skipped (centre too near, or refused)", counters.mecp_skipped);
+    status.add("MECP polygons", counters.mecp_polygons);
+    status.add("MECP group matches", counters.mecp_group_matches);
+    status.add("MECP: centre fitted, corners did not", counters.mecp_group_refused);
+    status.add("MECP: pairings changed by the group", counters.mecp_pairings_changed);
+    status.add("MECP polygons remembered", counters.mecp_remembered);
   }
   addRearAndMap(status);
   const RearCounters rear = sources_.rear ? sources_.rear->counters() : RearCounters{};

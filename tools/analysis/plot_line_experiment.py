@@ -28,7 +28,7 @@ STYLE = {
     "theta_lines": ("tab:blue", "points + θ lines (ends as points)"),
     "theta_lines_no_ends": ("tab:gray", "points + θ lines, no ends"),
     "points_360": ("tab:orange", "points, 360°"),
-    "points_mecp_360": ("tab:purple", "points + MECP, 360°"),
+    "points_mecp_360": ("tab:purple", "points by MECP association, 360°"),
 }
 
 

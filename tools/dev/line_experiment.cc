@@ -11,12 +11,12 @@
 //                          in the state (thesis eqs. 4.35, 4.38)
 //   theta_lines_no_ends    points + θ-only lines, the end points never used
 //   points_360             points alone, seen all round (two lasers, §4.4)
-//   points_mecp_360        points seen all round + the MECP: after each
-//                          scan's point updates, the maximum empty convex
-//                          polygon of the matched points around the robot
-//                          updates the filter once more as the mean of its
-//                          member landmarks (thesis §4.4.3; not added to
-//                          the state; mecp/mecp_update.h)
+//   points_mecp_360        points seen all round, associated by MECP (thesis
+//                          §4.4.3; mecp/mecp_association.h): each scan's
+//                          maximum empty convex polygon around the robot
+//                          matched against the polygons remembered and its
+//                          corners paired as a group, the other points by
+//                          nearest neighbour, whatever --association says
 // The MECP needs points on every side of the robot, which a 180° laser
 // does not give (the thesis assumes two lasers), hence its own baseline.
 //
@@ -79,10 +79,10 @@
 //                 "line i theta_true p_true theta_est p_est" (θ-only lines:
 //                 p from the estimated end points, nan without them)
 // and runs.txt (per variant and seed: mean_pos_err_m final_pos_err_m
-// mean_point_err_m wrong_associations duplicate_landmarks), mecp.txt (per MECP variant: how many
-// scans gave an update, how many were skipped and why, the MECP innovations' mean NIS), world.txt
-// (the walls "wall x1 y1 x2 y2" and points "point x y") and summary.txt (one line per variant;
-// columns named in its header; the options of the run on its first line).
+// mean_point_err_m wrong_associations duplicate_landmarks), mecp.txt (per MECP variant: scans
+// with a polygon, group matches and refusals, pairings the group changed, polygons remembered),
+// world.txt (the walls "wall x1 y1 x2 y2" and points "point x y") and summary.txt (one line per
+// variant; columns named in its header; the options of the run on its first line).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -98,7 +98,7 @@
 #include "ekf_slam_core/filter/chi_square.h"
 #include "ekf_slam_core/filter/data_association.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
-#include "ekf_slam_core/mecp/mecp_update.h"
+#include "ekf_slam_core/mecp/mecp_association.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
 #include "tools/dev/experiment_options.h"
 
@@ -391,10 +391,16 @@ struct Refusals {
   long points = 0, lines = 0, augment = 0, predict = 0;
 };
 
-// What the MECP update did, over all scans of all runs.
+// What the MECP association did, over all scans of all runs.
 struct MecpCounts {
-  long applied = 0, no_polygon = 0, near_centre = 0, refused = 0;
-  double nis_sum = 0;
+  long polygons = 0, group_matches = 0, group_refused = 0, pairings_changed = 0, remembered = 0;
+  void add(const ekf_slam::MecpCounters& c) {
+    polygons += c.mecp_polygons;
+    group_matches += c.mecp_group_matches;
+    group_refused += c.mecp_group_refused;
+    pairings_changed += c.mecp_pairings_changed;
+    remembered += c.mecp_remembered;
+  }
 };
 
 // Estimated offset of a line landmark: kLine its own p; kLineAngle the
@@ -451,6 +457,7 @@ void runOnce(Variant variant, const Conditions& conditions, unsigned seed, doubl
   std::vector<int> point_id(points().size(), -1), line_id(walls().size(), -1);
   std::vector<int> feature_of;
   const ekf_slam::AssociationOptions association;
+  ekf_slam::MecpAssociation mecp_association;
   Matrix2 line_noise = Matrix2::Zero();
   line_noise(0, 0) = kLinePSigma * kLinePSigma;
   line_noise(1, 1) = kLineThetaSigma * kLineThetaSigma;
@@ -468,8 +475,10 @@ void runOnce(Variant variant, const Conditions& conditions, unsigned seed, doubl
     }
     std::vector<PointMatch> matches;
     std::vector<int> fresh;
-    if (conditions.nearest_neighbour) {
-      const ekf_slam::AssociationResult result = ekf_slam::associate(filter, seen, association);
+    if (conditions.nearest_neighbour || usesMecp(variant)) {
+      const ekf_slam::AssociationResult result =
+          usesMecp(variant) ? mecp_association.associate(filter, seen, association, nullptr)
+                            : ekf_slam::associate(filter, seen, association);
       matches = result.matches();
       fresh = result.newLandmarks();
       for (const PointMatch& m : matches) {
@@ -508,24 +517,12 @@ void runOnce(Variant variant, const Conditions& conditions, unsigned seed, doubl
       landmark_of[i] = id;
     }
     if (usesMecp(variant)) {
-      // The readings matched or just added (-1: neither, left out).
-      const ekf_slam::MecpUpdateResult result =
-          ekf_slam::updateWithMecp(&filter, seen, landmark_of);
-      switch (result.outcome) {
-        case ekf_slam::MecpOutcome::kApplied:
-          ++mecp->applied;
-          mecp->nis_sum += result.nis;
-          break;
-        case ekf_slam::MecpOutcome::kNoPolygon:
-          ++mecp->no_polygon;
-          break;
-        case ekf_slam::MecpOutcome::kNearCentre:
-          ++mecp->near_centre;
-          break;
-        case ekf_slam::MecpOutcome::kFilterRefused:
-          ++mecp->refused;
-          break;
+      ekf_slam::IterationReport report;
+      report.matches = matches;
+      for (int i : fresh) {
+        if (landmark_of[i] >= 0) report.created.push_back({i, landmark_of[i]});
       }
+      mecp_association.remember(filter, report);
     }
     if (!use_lines) return;
     const Pose2 sensor = ekf_slam::compose(step.true_pose, sim_options.laser_pose);
@@ -638,6 +635,7 @@ void runOnce(Variant variant, const Conditions& conditions, unsigned seed, doubl
   }
   run->mean_pos /= k + 1;
   run->mean_point /= k + 1;
+  mecp->add(mecp_association.counters());
 
   if (map_out) {
     for (size_t i = 0; i < point_id.size(); ++i) {
@@ -704,8 +702,8 @@ int main(int argc, char** argv) {
              "consistent mean_point_err_m final_point_err_m final_line_angle_err_rad "
              "refused_updates wrong_associations_per_run duplicate_landmarks_per_run\n";
   std::ofstream mecp_out(dir + "mecp.txt");
-  mecp_out << "# variant scans_applied scans_no_polygon scans_near_centre scans_refused "
-              "mean_nis_applied\n";
+  mecp_out << "# variant scans_with_polygon group_matches group_refused pairings_changed "
+              "polygons_remembered (sums over the runs)\n";
   std::ofstream per_run(dir + "runs.txt");
   per_run << "# variant seed mean_pos_err_m final_pos_err_m mean_point_err_m wrong_associations "
              "duplicate_landmarks\n";
@@ -729,8 +727,8 @@ int main(int argc, char** argv) {
       duplicates += run.duplicates;
     }
     if (usesMecp(variant)) {
-      mecp_out << name << ' ' << mecp.applied << ' ' << mecp.no_polygon << ' ' << mecp.near_centre
-               << ' ' << mecp.refused << ' ' << ratio(mecp.nis_sum, static_cast<int>(mecp.applied))
+      mecp_out << name << ' ' << mecp.polygons << ' ' << mecp.group_matches << ' '
+               << mecp.group_refused << ' ' << mecp.pairings_changed << ' ' << mecp.remembered
                << '\n';
     }
     std::ofstream path(dir + name + "_path.txt");
