@@ -6,12 +6,16 @@ mis-associations.
 usage: tools/analysis/plot_rooms_experiment.py DIR
 Reads DIR/summary.txt, DIR/runs.txt, DIR/world.txt and per mode M
 DIR/M.txt, DIR/M_path.txt, DIR/M_map.txt. Writes DIR/rooms_experiment.png
-(run 0 of each mode: walls, true features, the map's landmarks with their
+(run 0 of each nearest-neighbour mode: walls, true features, the map's landmarks with their
 3-sigma ellipses, the estimated path and the features paired across a
 wall),
-DIR/rooms_errors.png (position error, pose NEES and cross-wall matches over
+DIR/rooms_mecp_partition.png (the polygons the MECP association remembered in
+run 0, thesis Fig. 4.6), DIR/rooms_errors.png (position error, pose NEES and cross-wall matches over
 time, means over the runs) and DIR/rooms_table.md (the summary as a
-Markdown table, with paired differences between the modes).
+Markdown table, with paired differences between the modes; "loops
+closed": runs whose return to room 1 paired at least 90 % of the
+observations of mapped features with their first landmarks, and in brackets
+that share over all runs).
 """
 import argparse
 import math
@@ -25,9 +29,16 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
 
 TITLE = {"open": "open association (every landmark)",
+         "open_jcbb": "JCBB (every landmark)",
+         "open_mecp": "MECP over open",
          "robot_room": "gated by the robot's room",
-         "observation_room": "gated by the observation's room"}
-COLOR = {"open": "tab:red", "robot_room": "tab:orange", "observation_room": "tab:blue"}
+         "observation_room": "gated by the observation's room",
+         "observation_room_mecp": "MECP over the observation's room"}
+COLOR = {"open": "tab:red", "open_jcbb": "tab:green", "open_mecp": "tab:purple",
+         "robot_room": "tab:orange", "observation_room": "tab:blue",
+         "observation_room_mecp": "tab:cyan"}
+# The maps drawn: the nearest-neighbour modes (the others' maps look alike).
+MAP_MODES = ["open", "robot_room", "observation_room"]
 
 
 def read_table(path):
@@ -101,6 +112,28 @@ def plot_maps(directory, modes, out_path):
     print("wrote %s" % out_path)
 
 
+def plot_partition(directory, mode, out_path):
+    """The remembered MECPs of run 0 over the world: thesis Fig. 4.6."""
+    world = read_tagged(os.path.join(directory, "world.txt"))
+    polygons = read_tagged(os.path.join(directory, mode + "_map.txt")).get("polygon", [])
+    fig, ax = plt.subplots(figsize=(11, 4.2))
+    draw_world(ax, world)
+    colours = plt.get_cmap("tab20")
+    for i, flat in enumerate(polygons):
+        xy = np.array(flat).reshape(-1, 2)
+        closed = np.vstack([xy, xy[:1]])
+        ax.fill(xy[:, 0], xy[:, 1], color=colours(i % 20), alpha=0.08, zorder=0)
+        ax.plot(closed[:, 0], closed[:, 1], color=colours(i % 20), linewidth=0.8, zorder=2)
+    ax.set_title("%s, run 0: the %d polygons remembered (each its members' estimates)"
+                 % (TITLE.get(mode, mode), len(polygons)))
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.tight_layout()
+    fig.savefig(out_path, dpi=100)
+    print("wrote %s" % out_path)
+
+
 def plot_errors(directory, modes, summary, out_path):
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     for mode in modes:
@@ -142,14 +175,15 @@ def write_table(summary, runs, out_path):
     lines = ["| association | runs | matches / run | mis-associations / run | "
              "cross-wall / run (total; in a doorway; runs with any) | "
              "landmarks / run (duplicates) | "
-             "mean / final position error (m) | average pose NEES |",
-             "|---|---|---|---|---|---|---|---|"]
+             "mean / final position error (m) | average pose NEES | loops closed |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for row in summary:
-        lines.append("| %s | %s | %.0f | %s | %s (%s; %s; %s) | %s (%s) | %s / %s | %s |" % (
+        lines.append("| %s | %s | %.0f | %s | %s (%s; %s; %s) | %s (%s) | %s / %s | %s | %s |" % (
             TITLE.get(row["mode"], row["mode"]), row["runs"], float(row["matches_per_run"]),
             row["mis_per_run"], row["cross_wall_per_run"], row["cross_wall_total"],
             row["cross_wall_at_door_total"], row["runs_with_cross_wall"], row["landmarks_per_run"], row["duplicates_per_run"],
-            row["mean_pos_err_m"], row["final_pos_err_m"], row["average_nees"]))
+            row["mean_pos_err_m"], row["final_pos_err_m"], row["average_nees"],
+            "%s (%.0f %%)" % (row["loops_closed"], 100 * float(row["return_right_fraction"]))))
     for row in summary:
         mode = row["mode"]
         if mode == "open":
@@ -176,8 +210,10 @@ def main():
     d = args.directory
     summary = read_table(os.path.join(d, "summary.txt"))
     modes = [row["mode"] for row in summary]
-    plot_maps(d, modes, os.path.join(d, "rooms_experiment.png"))
+    plot_maps(d, [m for m in MAP_MODES if m in modes], os.path.join(d, "rooms_experiment.png"))
     plot_errors(d, modes, summary, os.path.join(d, "rooms_errors.png"))
+    if "open_mecp" in modes:
+        plot_partition(d, "open_mecp", os.path.join(d, "rooms_mecp_partition.png"))
     write_table(summary, read_table(os.path.join(d, "runs.txt")),
                 os.path.join(d, "rooms_table.md"))
 

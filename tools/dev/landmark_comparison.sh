@@ -6,6 +6,8 @@
 #   pipeline.landmarks      points | points+lines | points+lines_theta
 #   association.method      nn | jcbb
 #   loop_closure.enabled    false | true
+# and pipeline.landmarks points+mecp (MECP association over nn), whose
+# polygon counts are listed under each table.
 # Each trajectory is scored with evaluate_relations (mean translational
 # error over the log's relations, m). Prints two markdown tables, without
 # and with loop closure, and writes them to OUT_DIR/table.md.
@@ -15,6 +17,7 @@
 #              builds the Release one and passes it)
 #   OUT_DIR    default output/landmark_comparison
 #   LOGS       logs to run (default: every NAME.orig.bag with a NAME.relations)
+#   COMBOS     landmarks/method pairs to run (default: all seven)
 set -euo pipefail
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -83,14 +86,22 @@ for loops in false true; do
     echo "| log | landmarks | association | scan-matched | filtered | causal | final |"
     echo "|---|---|---|---|---|---|---|"
   } | tee -a "$table"
+  mecp_notes=()
   for log in $LOGS; do
-    for landmarks in points points+lines points+lines_theta; do
-      for method in nn jcbb; do
-        read -r matched filtered live smoothed < <(run "$log" "$landmarks" "$method" "$loops")
-        echo "| $log | $landmarks | $method | $matched | $filtered | $live | $smoothed |" |
-          tee -a "$table"
-      done
+    for combo in ${COMBOS:-points/nn points/jcbb points+lines/nn points+lines/jcbb \
+      points+lines_theta/nn points+lines_theta/jcbb points+mecp/nn}; do
+      landmarks=${combo%/*} method=${combo#*/}
+      read -r matched filtered live smoothed < <(run "$log" "$landmarks" "$method" "$loops")
+      echo "| $log | $landmarks | $method | $matched | $filtered | $live | $smoothed |" |
+        tee -a "$table"
+      if [ "$landmarks" = points+mecp ]; then
+        mecp_notes+=("- $log: $(grep -h '^MECP association' \
+          "$out/runs/$log-points_mecp-$method-loops_$loops"/report.txt 2>/dev/null || echo '-')")
+      fi
     done
   done
+  if [ ${#mecp_notes[@]} -gt 0 ]; then
+    { echo; printf '%s\n' "${mecp_notes[@]}"; } | tee -a "$table"
+  fi
 done
 echo "landmark_comparison: $table" >&2

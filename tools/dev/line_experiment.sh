@@ -4,7 +4,7 @@
 # ekf_slam_line_experiment and ekf_slam_rooms_experiment and runs each
 # (§4.3.5 with the MECP variant of §4.4; §4.4.5 into OUT_DIR/rooms) with
 # the default odometry noise and with the odometry noise's standard
-# deviations tripled; then the line experiment again under the thesis's
+# deviations tripled (the rooms also doubled); then the line experiment again under the thesis's
 # own conditions (nearest-neighbour association of the points, walls
 # measured from their two end readings, occlusion, steering by the
 # estimate) into OUT_DIR/thesis_conditions, and plots all six.
@@ -38,7 +38,8 @@ rooms_exe=$bin/ekf_slam_rooms_experiment
 for e in "$exe" "$rooms_exe"; do
   [ -x "$e" ] || { echo "line_experiment: no executable at $e" >&2; exit 1; }
 done
-mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x3" "$out/thesis_conditions/odometry_x3" \
+mkdir -p "$out/odometry_x3" "$out/rooms/odometry_x2" "$out/rooms/odometry_x3" \
+  "$out/thesis_conditions/odometry_x3" \
   "$out/thesis_conditions/nn_odometry_x3"
 echo "== default odometry noise ($runs runs per variant)"
 "$exe" --out "$out" --runs "$runs"
@@ -61,6 +62,9 @@ echo "== nearest-neighbour association alone, odometry noise x3"
 echo "== rooms, default odometry noise ($rooms_runs runs per mode)"
 "$rooms_exe" --out "$out/rooms" --runs "$rooms_runs"
 /usr/bin/python3 "$root/tools/analysis/plot_rooms_experiment.py" "$out/rooms"
+echo "== rooms, odometry noise x2 (where nearest neighbour starts to fail)"
+"$rooms_exe" --out "$out/rooms/odometry_x2" --runs "$rooms_runs" --odometry-noise-scale 2
+/usr/bin/python3 "$root/tools/analysis/plot_rooms_experiment.py" "$out/rooms/odometry_x2"
 echo "== rooms, odometry noise x3"
 "$rooms_exe" --out "$out/rooms/odometry_x3" --runs "$rooms_runs" --odometry-noise-scale 3
 /usr/bin/python3 "$root/tools/analysis/plot_rooms_experiment.py" "$out/rooms/odometry_x3"

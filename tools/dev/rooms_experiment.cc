@@ -1,15 +1,21 @@
 // ekf_slam_rooms_experiment: the thesis's rooms simulation (§4.4.5,
 // Figs. 4.7–4.8) with this filter. Three rooms in a row joined by doors; the
 // robot explores each room in turn and drives back through all of them to
-// its start; the filter associates its point observations itself (nearest
-// neighbour, AssociationOptions' defaults) in three modes that differ only
-// in the candidates:
-//   open              every landmark of the map;
-//   robot_room        the landmarks of the robot's room (both rooms of a
-//                     doorway within 0.8 m; no gate when its estimate is on
-//                     a wall's barrier elsewhere);
-//   observation_room  the landmarks of the observation's room
-//                     (associateInRooms, mecp/room_gating.h).
+// its start; the filter associates its point observations itself
+// (AssociationOptions' defaults) in six modes:
+//   open              nearest neighbour among every landmark of the map;
+//   open_jcbb         joint compatibility (JCBB) among every landmark;
+//   open_mecp         MECP association (mecp/mecp_association.h) over
+//                     open: each scan's polygon round the robot matched to
+//                     the remembered ones, its corners paired as a group;
+//   robot_room        nearest neighbour among the landmarks of the robot's
+//                     room (both rooms of a doorway within 0.8 m; no gate
+//                     when its estimate is on a wall's barrier elsewhere);
+//   observation_room  nearest neighbour among the landmarks of the
+//                     observation's room (associateInRooms,
+//                     mecp/room_gating.h);
+//   observation_room_mecp  MECP association over observation_room, the
+//                     thesis's own combination (§4.4.5).
 // Both gates label each landmark at augmentation with
 // RoomGate::roomsOf(its estimated position, the laser's estimated
 // position), door jambs with both rooms; observation_room labels each
@@ -44,11 +50,17 @@
 // draws for a seed. A match pairs an observation of true feature A with a
 // landmark created from feature B; it is a mis-association when A ≠ B and
 // a cross-wall one when A and B share no room (a jamb is in both of its
-// rooms).
+// rooms). The loop closes in a run when, back in room 1 after room 3, at
+// least 90 % of the observations of features already mapped are paired
+// with the landmark first made of their feature.
 //
 // Writes into DIR:
 //   world.txt      "wall x1 y1 x2 y2", "point x y room_a room_b" (room_b −1
 //                  unless a jamb), "door x1 y1 x2 y2" (the openings found)
+//   mecp.txt       per MECP mode, sums over the runs: scans with a polygon
+//                  round the robot, group matches and refusals, pairings
+//                  the group changed, polygons remembered, and of the
+//                  pairings changed those now right and those now wrong
 //   summary.txt    one line per mode; columns named in its header (the
 //                  cross-wall matches made with the robot's estimate within
 //                  0.8 m of a doorway's centre are also counted apart)
@@ -59,7 +71,10 @@
 //   M_path.txt     run 0: step x_true y_true x_est y_est
 //   M_map.txt      run 0 at the end: "landmark id feature x y cxx cxy cyy"
 //                  and each cross-wall match "cross step feature_seen
-//                  feature_of_landmark x_robot y_robot"
+//                  feature_of_landmark x_robot y_robot"; the MECP modes
+//                  also each remembered polygon "polygon x1 y1 x2 y2 …"
+//                  (its members' estimates, counter-clockwise: the
+//                  partition of thesis Fig. 4.6)
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -75,12 +90,14 @@
 #include "ekf_slam_core/filter/data_association.h"
 #include "ekf_slam_core/filter/ekf_slam.h"
 #include "ekf_slam_core/mecp/doorways.h"
+#include "ekf_slam_core/mecp/mecp_association.h"
 #include "ekf_slam_core/mecp/room_gating.h"
 #include "ekf_slam_core/sim/landmark_simulator.h"
 #include "tools/dev/experiment_options.h"
 
 namespace {
 
+using ekf_slam::AssociationDecision;
 using ekf_slam::EkfSlam;
 using ekf_slam::FilterStatus;
 using ekf_slam::kPi;
@@ -192,15 +209,23 @@ bool inSight(const Vector2& sensor, const Vector2& point, const std::vector<Segm
   return true;
 }
 
-enum class Mode { kOpen, kRobotRoom, kObservationRoom };
+enum class Mode { kOpen, kOpenJcbb, kOpenMecp, kRobotRoom, kObservationRoom, kObservationRoomMecp };
+constexpr Mode kModes[] = {Mode::kOpen,      Mode::kOpenJcbb,        Mode::kOpenMecp,
+                           Mode::kRobotRoom, Mode::kObservationRoom, Mode::kObservationRoomMecp};
 const char* modeName(Mode m) {
   switch (m) {
     case Mode::kOpen:
       return "open";
+    case Mode::kOpenJcbb:
+      return "open_jcbb";
+    case Mode::kOpenMecp:
+      return "open_mecp";
     case Mode::kRobotRoom:
       return "robot_room";
     case Mode::kObservationRoom:
       return "observation_room";
+    case Mode::kObservationRoomMecp:
+      return "observation_room_mecp";
   }
   return "unknown";
 }
@@ -234,6 +259,17 @@ struct RunResult {
   int landmarks = 0, duplicates = 0;
   double mean_pos = 0, final_pos = 0;
   long refused = 0;
+  // Back in room 1 after room 3: observations of features already mapped,
+  // and of those the ones paired with the landmark first made of their
+  // feature (the loop closed on them).
+  long return_observations = 0, return_right = 0;
+  ekf_slam::MecpCounters mecp;  // the MECP modes'
+  // The MECP modes: pairings the group changed from its base association's
+  // that are right (the feature's own landmark) and wrong.
+  long group_fixed = 0, group_broke = 0;
+  bool loopClosed() const {
+    return return_observations > 0 && return_right >= 0.9 * return_observations;
+  }
 };
 
 void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomGate& gate_template,
@@ -256,8 +292,13 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
   options.tentative_max_age = 0;  // every observation is of a real feature
   EkfSlam filter(options, sim.current().true_pose);
   ekf_slam::RoomGate gate = gate_template;
-  const ekf_slam::AssociationOptions association;
-  std::unordered_map<int, int> feature_of;  // landmark id → the feature it was created from
+  ekf_slam::AssociationOptions association;
+  if (mode == Mode::kOpenJcbb)
+    association.method = ekf_slam::AssociationMethod::kJointCompatibility;
+  ekf_slam::MecpAssociation mecp;
+  std::unordered_map<int, int> feature_of;      // landmark id → the feature it was created from
+  std::unordered_map<int, int> first_landmark;  // feature → the landmark first made of it
+  bool been_in_last_room = false;
 
   auto step = [&](size_t k, const ekf_slam::sim::SimStep& s) {
     const Vector2 sensor = ekf_slam::compose(s.true_pose, sim_options.laser_pose).translation();
@@ -269,19 +310,58 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       seen.push_back(s.true_landmark[i]);
     }
     const Vector2 robot = filter.pose().translation();
-    ekf_slam::AssociationResult result;
+    ekf_slam::AssociationResult result, base;
+    const ekf_slam::Associator in_rooms = [&](const EkfSlam& f,
+                                              const std::vector<PointObservation>& o,
+                                              const ekf_slam::AssociationOptions& a) {
+      return ekf_slam::associateInRooms(f, o, a, gate);
+    };
     switch (mode) {
       case Mode::kOpen:
+      case Mode::kOpenJcbb:
         result = ekf_slam::associate(filter, observations, association);
+        break;
+      case Mode::kOpenMecp:
+        result = mecp.associate(filter, observations, association, nullptr);
+        base = ekf_slam::associate(filter, observations, association);
         break;
       case Mode::kRobotRoom:
         result = associateInRobotRoom(filter, observations, association, gate);
         break;
       case Mode::kObservationRoom:
-        result = ekf_slam::associateInRooms(filter, observations, association, gate);
+        result = in_rooms(filter, observations, association);
+        break;
+      case Mode::kObservationRoomMecp:
+        result = mecp.associate(filter, observations, association, in_rooms);
+        base = in_rooms(filter, observations, association);
         break;
     }
+    for (size_t i = 0; i < base.observations.size(); ++i) {
+      const int before = base.observations[i].decision == AssociationDecision::kMatched
+                             ? base.observations[i].landmark_id
+                             : -1;
+      const int after = result.observations[i].decision == AssociationDecision::kMatched
+                            ? result.observations[i].landmark_id
+                            : -1;
+      if (after == before || after < 0) continue;
+      if (feature_of.at(after) == seen[i]) {
+        ++run->group_fixed;
+      } else {
+        ++run->group_broke;
+      }
+    }
     const std::vector<ekf_slam::PointMatch> matches = result.matches();
+    if (s.true_pose.x > (kRooms - 1) * kRoomWidth) been_in_last_room = true;
+    if (been_in_last_room && s.true_pose.x < kRoomWidth) {
+      std::vector<int> paired(observations.size(), -1);
+      for (const ekf_slam::PointMatch& m : matches) paired[m.observation] = m.landmark_id;
+      for (size_t i = 0; i < observations.size(); ++i) {
+        const auto first = first_landmark.find(seen[i]);
+        if (first == first_landmark.end()) continue;
+        ++run->return_observations;
+        if (paired[i] == first->second) ++run->return_right;
+      }
+    }
     for (const ekf_slam::PointMatch& m : matches) {
       const int a = seen[m.observation], b = feature_of.at(m.landmark_id);
       ++run->matches;
@@ -301,16 +381,21 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       }
     }
     if (filter.update(observations, matches) != FilterStatus::kOk) ++run->refused;
+    ekf_slam::IterationReport report;
+    report.matches = matches;
     for (int i : result.newLandmarks()) {
       int id = -1;
       if (filter.augment(observations[i], &id) != FilterStatus::kOk) {
         ++run->refused;
         continue;
       }
+      report.created.push_back({i, id});
       feature_of[id] = seen[i];
+      first_landmark.emplace(seen[i], id);
       gate.labelLandmark(id, filter.landmarkPosition(filter.slotOf(id)),
                          ekf_slam::compose(filter.pose(), options.laser_pose).translation());
     }
+    mecp.remember(filter, report);
 
     if (stats->size() <= k) stats->resize(k + 1);
     StepStats& st = (*stats)[k];
@@ -338,6 +423,7 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
   }
   run->mean_pos /= k + 1;
   run->landmarks = filter.landmarkCount();
+  run->mecp = mecp.counters();
   std::vector<int> mapped;
   for (const auto& entry : feature_of) mapped.push_back(entry.second);
   std::sort(mapped.begin(), mapped.end());
@@ -350,6 +436,20 @@ void runOnce(Mode mode, unsigned seed, double noise_scale, const ekf_slam::RoomG
       const ekf_slam::Matrix2 c = filter.landmarkCovariance(slot);
       *map_out << "landmark " << info.id << ' ' << feature_of.at(info.id) << ' ' << m.x() << ' '
                << m.y() << ' ' << c(0, 0) << ' ' << c(0, 1) << ' ' << c(1, 1) << '\n';
+    }
+    for (const std::vector<int>& polygon : mecp.polygons()) {  // the MECP modes' partition
+      std::string line = "polygon";
+      bool complete = true;
+      for (int id : polygon) {
+        const int slot = filter.slotOf(id);
+        if (slot < 0) {
+          complete = false;
+          break;
+        }
+        const Vector2 m = filter.landmarkPosition(slot);
+        line += ' ' + std::to_string(m.x()) + ' ' + std::to_string(m.y());
+      }
+      if (complete) *map_out << line << '\n';
     }
   }
 }
@@ -406,21 +506,24 @@ int main(int argc, char** argv) {
   summary << "# mode runs steps mean_pos_err_m final_pos_err_m average_nees band_lower band_upper "
              "matches_per_run mis_per_run cross_wall_per_run cross_wall_total "
              "cross_wall_at_door_total runs_with_cross_wall landmarks_per_run "
-             "duplicates_per_run refused\n";
+             "duplicates_per_run refused loops_closed return_right_fraction\n";
+  std::ofstream mecp_out(dir + "mecp.txt");
+  mecp_out << "# mode scans_with_polygon group_matches group_refused pairings_changed "
+              "polygons_remembered changed_right changed_wrong (sums over the runs)\n";
   std::ofstream per_run(dir + "runs.txt");
   per_run << "# mode seed matches mis_associations cross_wall landmarks duplicates "
              "mean_pos_err_m final_pos_err_m\n";
   const double dt = ekf_slam::sim::LandmarkSimOptions().dt;
-  for (Mode mode : {Mode::kOpen, Mode::kRobotRoom, Mode::kObservationRoom}) {
+  for (Mode mode : kModes) {
     const std::string name = modeName(mode);
     std::vector<StepStats> stats;
     std::ofstream path(dir + name + "_path.txt");
     path << "# step x_true y_true x_est y_est (run 0)\n";
     std::ofstream map_out(dir + name + "_map.txt");
     map_out << "# landmark id feature x y cxx cxy cyy | cross step feature_seen "
-               "feature_of_landmark x_robot y_robot (run 0)\n";
+               "feature_of_landmark x_robot y_robot | polygon x1 y1 x2 y2 ... (run 0)\n";
     RunResult total;
-    int runs_with_cross = 0;
+    int runs_with_cross = 0, loops_closed = 0;
     double final_pos = 0;
     for (int r = 0; r < runs; ++r) {
       RunResult run;
@@ -438,6 +541,16 @@ int main(int argc, char** argv) {
       total.refused += run.refused;
       final_pos += run.final_pos;
       if (run.cross_wall > 0) ++runs_with_cross;
+      if (run.loopClosed()) ++loops_closed;
+      total.return_observations += run.return_observations;
+      total.mecp.mecp_polygons += run.mecp.mecp_polygons;
+      total.mecp.mecp_group_matches += run.mecp.mecp_group_matches;
+      total.mecp.mecp_group_refused += run.mecp.mecp_group_refused;
+      total.mecp.mecp_pairings_changed += run.mecp.mecp_pairings_changed;
+      total.mecp.mecp_remembered += run.mecp.mecp_remembered;
+      total.group_fixed += run.group_fixed;
+      total.group_broke += run.group_broke;
+      total.return_right += run.return_right;
     }
     std::ofstream out(dir + name + ".txt");
     out << "# " << name << ", " << runs
@@ -454,16 +567,26 @@ int main(int argc, char** argv) {
     const size_t steps = stats.size();
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s %d %zu %.4f %.4f %.3f %.3f %.3f %.1f %.2f %.2f %ld %ld %d %.2f %.2f %ld\n",
+                  "%s %d %zu %.4f %.4f %.3f %.3f %.3f %.1f %.2f %.2f %ld %ld %d %.2f %.2f %ld %d "
+                  "%.3f\n",
                   name.c_str(), runs, steps, pos_total / steps, final_pos / runs,
                   nees_total / (steps - 1), band.lower, band.upper,
                   static_cast<double>(total.matches) / runs, static_cast<double>(total.mis) / runs,
                   static_cast<double>(total.cross_wall) / runs, total.cross_wall,
                   total.cross_wall_at_door, runs_with_cross,
                   static_cast<double>(total.landmarks) / runs,
-                  static_cast<double>(total.duplicates) / runs, total.refused);
+                  static_cast<double>(total.duplicates) / runs, total.refused, loops_closed,
+                  total.return_observations > 0
+                      ? static_cast<double>(total.return_right) / total.return_observations
+                      : std::nan(""));
     summary << line;
     std::cout << line;
+    if (mode == Mode::kOpenMecp || mode == Mode::kObservationRoomMecp) {
+      mecp_out << name << ' ' << total.mecp.mecp_polygons << ' ' << total.mecp.mecp_group_matches
+               << ' ' << total.mecp.mecp_group_refused << ' ' << total.mecp.mecp_pairings_changed
+               << ' ' << total.mecp.mecp_remembered << ' ' << total.group_fixed << ' '
+               << total.group_broke << '\n';
+    }
   }
   return 0;
 }
