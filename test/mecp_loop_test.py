@@ -34,6 +34,8 @@ from ekf_slam.msg import FeaturePoint, Features
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
 from tf2_msgs.msg import TFMessage
 
+from ekf_slam_tools.se2 import compose, inverse, transform_point
+
 STEP = 0.1  # s between scans
 SLIP = math.radians(5.0)
 SEEN_WITHIN = 0.6  # m from the room's centre
@@ -43,26 +45,9 @@ BEARING_SIGMA = 0.01  # rad
 NODES = ("nn", "mecp")
 
 
-def compose(a, b):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2])
-
-
-def inverse(a):
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2])
-
-
 def transform_to(pose, point):
     """The map point in the frame of pose."""
-    x, y = point[0] - pose[0], point[1] - pose[1]
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    return (c * x + s * y, -s * x + c * y)
-
-
-def transform_from(pose, point):
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    return (pose[0] + c * point[0] - s * point[1], pose[1] + s * point[0] + c * point[1])
+    return transform_point(inverse(pose), point)
 
 
 def drive():
@@ -92,7 +77,7 @@ def world(truth, odometry, returning):
     # on return the estimate is the odometry's, and E maps where a point
     # truly is to where the filter puts it.
     error = compose(odometry[returning], inverse(truth[returning]))
-    return CORNERS + [transform_from(error, c) for c in CORNERS]
+    return CORNERS + [transform_point(error, c) for c in CORNERS]
 
 
 def features_message(stamp, pose, points):
