@@ -103,6 +103,14 @@ std::string DoorwayOptions::validate() const {
   return "";
 }
 
+FreeSpaceTest crossesNoWall(std::vector<Segment2> walls) {
+  return [walls = std::move(walls)](const Vector2& from, const Vector2& to) {
+    return std::none_of(walls.begin(), walls.end(), [&](const Segment2& w) {
+      return segmentDistance(from, to, w.start, w.end) == 0.0;
+    });
+  };
+}
+
 std::vector<Doorway> findDoorways(const std::vector<Segment2>& walls, const DoorwayOptions& options,
                                   const FreeSpaceTest& is_free) {
   if (!options.validate().empty()) return {};

@@ -80,6 +80,12 @@ struct Doorway {
 // from an occupancy grid.
 using FreeSpaceTest = std::function<bool(const Vector2& from, const Vector2& to)>;
 
+// The free-space test a map of walls alone gives: the path is free when it
+// crosses none of `walls`. With it a gap that has a wall standing across it
+// within free_space_depth (a niche, an alcove behind a break in a wall) is
+// no door: nothing could pass through it.
+FreeSpaceTest crossesNoWall(std::vector<Segment2> walls);
+
 // The doorways among `walls`, narrowest first. Empty when the options are
 // invalid or a wall has a non-finite end; zero-length walls are skipped.
 std::vector<Doorway> findDoorways(const std::vector<Segment2>& walls, const DoorwayOptions& options,

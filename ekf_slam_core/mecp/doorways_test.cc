@@ -110,6 +110,19 @@ TEST(FindDoorways, TheFreeSpaceTestIsAskedAcrossTheGap) {
       1u);
 }
 
+// A break in a corridor's wall with a wall 0.3 m behind it (a niche): the
+// walls alone say nothing can pass, so it is no door; with the back wall
+// 0.8 m away, beyond free_space_depth, it is one.
+TEST(FindDoorways, AGapWithAWallJustBehindItIsNoDoorByTheWallsAlone) {
+  auto walls = [](double behind) {
+    return std::vector<Segment2>{
+        {{0, 0}, {2, 0}}, {{3, 0}, {5, 0}}, {{1.5, -behind}, {3.5, -behind}}};
+  };
+  EXPECT_EQ(findDoorways(walls(0.3), DoorwayOptions()).size(), 1u);  // no test: a door
+  EXPECT_TRUE(findDoorways(walls(0.3), DoorwayOptions(), crossesNoWall(walls(0.3))).empty());
+  EXPECT_EQ(findDoorways(walls(0.8), DoorwayOptions(), crossesNoWall(walls(0.8))).size(), 1u);
+}
+
 TEST(FindDoorways, BadInputGivesNoDoorways) {
   const std::vector<Segment2> walls{{{4, 0}, {4, 1}}, {{4, 2}, {4, 3}}};
   DoorwayOptions options;

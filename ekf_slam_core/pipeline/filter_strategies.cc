@@ -28,7 +28,8 @@ void RoomGatingStrategy::afterIteration(const EkfSlam& filter, const LineLandmar
 }
 
 // The walls mapped so far (the line landmarks' sighted stretches) with
-// their doorways make the rooms. The map moves as the filter corrects it,
+// their doorways make the rooms; a gap is a doorway only where no mapped
+// wall stands across the way through it (crossesNoWall). The map moves as the filter corrects it,
 // so the rooms are drawn afresh and every point landmark is labelled again
 // from where it was first seen. A map that cannot be drawn (no walls yet,
 // an extent beyond rooms.map.max_cells) leaves the association ungated.
@@ -39,7 +40,8 @@ void RoomGatingStrategy::rebuild(const EkfSlam& filter, const LineLandmarks& lin
     it = filter.slotOf(it->first) < 0 ? seen_from_.erase(it) : std::next(it);
   }
   const std::vector<Segment2> walls = lines.walls(filter);
-  const std::vector<Doorway> doorways = findDoorways(walls, options_.doorways);
+  const std::vector<Doorway> doorways =
+      findDoorways(walls, options_.doorways, crossesNoWall(walls));
   RoomMap rooms;
   const std::string error =
       walls.empty() ? "no walls mapped" : rooms.build(walls, doorways, options_.map);

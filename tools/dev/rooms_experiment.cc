@@ -468,8 +468,8 @@ int main(int argc, char** argv) {
   const std::string dir = out_dir + "/";
 
   const std::vector<Segment2> wall_list = walls();
-  const std::vector<ekf_slam::Doorway> doorways =
-      ekf_slam::findDoorways(wall_list, ekf_slam::DoorwayOptions());
+  const std::vector<ekf_slam::Doorway> doorways = ekf_slam::findDoorways(
+      wall_list, ekf_slam::DoorwayOptions(), ekf_slam::crossesNoWall(wall_list));
   ekf_slam::RoomMap rooms;
   ekf_slam::RoomMapOptions room_options;
   room_options.wall_inflation = kWallInflation;
