@@ -18,6 +18,9 @@
 #   OUT_DIR    default output/landmark_comparison
 #   LOGS       logs to run (default: every NAME.orig.bag with a NAME.relations)
 #   COMBOS     landmarks/method pairs to run (default: all seven)
+#   ROOMS      true: association gated by rooms drawn from the mapped walls
+#              (pipeline.rooms.enabled; needs wall landmarks)
+#   LOOPS      loop closure settings to run (default: "false true")
 set -euo pipefail
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -54,11 +57,11 @@ score() {  # log trajectory -> mean translation error [m] (or "-")
 # filtered live smoothed" errors.
 run() {
   local log=$1 landmarks=$2 method=$3 loops=$4
-  local name="$log-${landmarks//+/_}-$method-loops_$loops"
+  local name="$log-${landmarks//+/_}-$method-loops_$loops-rooms_${ROOMS:-false}"
   local dir=$out/runs/$name
   mkdir -p "$dir"
-  printf 'pipeline:\n  landmarks: %s\nassociation:\n  method: %s\nloop_closure:\n  enabled: %s\n' \
-    "$landmarks" "$method" "$loops" > "$dir/config.yaml"
+  printf 'pipeline:\n  landmarks: %s\n  rooms:\n    enabled: %s\nassociation:\n  method: %s\nloop_closure:\n  enabled: %s\n' \
+    "$landmarks" "${ROOMS:-false}" "$method" "$loops" > "$dir/config.yaml"
   if ! "$bin/ekf_slam_offline" --bag "$data/$log.orig.bag" --out "$dir" --config "$dir/config.yaml" \
     --no-figures --no-maps > "$dir/run.log" 2>&1; then
     echo "landmark_comparison: $name failed ($dir/run.log)" >&2
@@ -74,7 +77,7 @@ run() {
 
 table=$out/table.md
 : > "$table"
-for loops in false true; do
+for loops in ${LOOPS:-false true}; do
   {
     echo
     if [ "$loops" = false ]; then
@@ -96,7 +99,7 @@ for loops in false true; do
         tee -a "$table"
       if [ "$landmarks" = points+mecp ]; then
         mecp_notes+=("- $log: $(grep -h '^MECP association' \
-          "$out/runs/$log-points_mecp-$method-loops_$loops"/report.txt 2>/dev/null || echo '-')")
+          "$out/runs/$log-points_mecp-$method-loops_$loops-rooms_${ROOMS:-false}"/report.txt 2>/dev/null || echo '-')")
       fi
     done
   done
