@@ -228,11 +228,18 @@ std::string validateFeatureSet(const FeatureSet& features) {
   return "";
 }
 
-FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& options) {
+FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& laser_options) {
   FeatureSet out;
-  out.error = validateFeatureOptions(options);
+  out.error = validateFeatureOptions(laser_options);
   if (out.error.empty()) out.error = validateScan(scan);
   if (!out.error.empty()) return out;
+  // Bearings rounded to beams (a merged scan) are off by up to half a beam,
+  // uniformly: variance q² / 12 beside the beam's own jitter.
+  FeatureOptions options = laser_options;
+  if (scan.bearing_quantisation > 0.0 && std::isfinite(scan.bearing_quantisation)) {
+    options.bearing_sigma =
+        std::hypot(options.bearing_sigma, scan.bearing_quantisation / std::sqrt(12.0));
+  }
 
   out.points = scanToPoints(scan);
   out.clusters = clusterPoints(out.points, options);

@@ -376,6 +376,37 @@ TEST(ExtractFeatures, PointModelSigmaWidensEveryPointByItsVariance) {
   EXPECT_NE(validateFeatureOptions(widened).find("point_model_sigma"), std::string::npos);
 }
 
+// A merged scan's bearings are rounded to its beams: the extraction counts
+// that as bearing noise of variance q² / 12, exactly as if the laser's own
+// bearing jitter were that much larger.
+TEST(ExtractFeatures, BearingQuantisationCountsAsBearingNoise) {
+  const Scene scene = scenes()[2];
+  std::mt19937 rng(11);
+  Scan scan = simulateScan(scene.world, scene.sensor, lms200(361), 0.01, 0.001, &rng);
+  FeatureOptions options;
+  const FeatureSet plain = extractFeatures(scan, options);
+  scan.bearing_quantisation = degToRad(1.0);
+  const FeatureSet quantised = extractFeatures(scan, options);
+  scan.bearing_quantisation = 0.0;
+  FeatureOptions jittery = options;
+  jittery.bearing_sigma = std::hypot(options.bearing_sigma, degToRad(1.0) / std::sqrt(12.0));
+  const FeatureSet expected = extractFeatures(scan, jittery);
+  ASSERT_GT(quantised.countLandmarkCandidates(), 0);
+  ASSERT_EQ(quantised.points_of_interest.size(), expected.points_of_interest.size());
+  for (size_t i = 0; i < expected.points_of_interest.size(); ++i) {
+    EXPECT_EQ(quantised.points_of_interest[i].covariance,
+              expected.points_of_interest[i].covariance);
+    EXPECT_EQ(quantised.points_of_interest[i].range_bearing_covariance,
+              expected.points_of_interest[i].range_bearing_covariance);
+  }
+  for (size_t i = 0;
+       i < std::min(plain.points_of_interest.size(), quantised.points_of_interest.size()); ++i) {
+    if (plain.points_of_interest[i].position != quantised.points_of_interest[i].position) continue;
+    EXPECT_GT(quantised.points_of_interest[i].covariance.trace(),
+              plain.points_of_interest[i].covariance.trace());
+  }
+}
+
 TEST(ExtractFeatures, EmptyAndAllInvalidScansGiveNothingAndNoError) {
   Scan scan;
   scan.angle_min = -kPi / 2.0;
