@@ -147,6 +147,10 @@ PointFeature segmentEnd(const Scan& scan, const std::vector<ScanPoint>& points,
     end.context = EndpointContext::kNoReturn;
   } else if (scan.ranges[neighbour] < q_point.range) {
     end.context = EndpointContext::kOccluded;
+  } else if (scan.merged) {
+    // The next beam's reading may come from another laser, which sees past
+    // the object's end from elsewhere (parallax): the end is not placed.
+    end.context = EndpointContext::kUnresolved;
   } else {
     // The object really ends between this beam and the next one, which
     // passes behind it. Place the end midway along that gap g with the
@@ -236,9 +240,9 @@ FeatureSet extractFeatures(const Scan& scan, const FeatureOptions& laser_options
   // Bearings rounded to beams (a merged scan) are off by up to half a beam,
   // uniformly: variance q² / 12 beside the beam's own jitter.
   FeatureOptions options = laser_options;
-  if (scan.bearing_quantisation > 0.0 && std::isfinite(scan.bearing_quantisation)) {
+  if (scan.merged) {
     options.bearing_sigma =
-        std::hypot(options.bearing_sigma, scan.bearing_quantisation / std::sqrt(12.0));
+        std::hypot(options.bearing_sigma, scan.angle_increment / std::sqrt(12.0));
   }
 
   out.points = scanToPoints(scan);

@@ -378,32 +378,38 @@ TEST(ExtractFeatures, PointModelSigmaWidensEveryPointByItsVariance) {
 
 // A merged scan's bearings are rounded to its beams: the extraction counts
 // that as bearing noise of variance q² / 12, exactly as if the laser's own
-// bearing jitter were that much larger.
-TEST(ExtractFeatures, BearingQuantisationCountsAsBearingNoise) {
+// bearing jitter were that much larger; and its occlusion edges place no
+// object end (the beam beyond one may come from the other laser).
+TEST(ExtractFeatures, AMergedScansRoundingIsNoiseAndItsOcclusionEdgesPlaceNoEnd) {
   const Scene scene = scenes()[2];
   std::mt19937 rng(11);
   Scan scan = simulateScan(scene.world, scene.sensor, lms200(361), 0.01, 0.001, &rng);
   FeatureOptions options;
-  const FeatureSet plain = extractFeatures(scan, options);
-  scan.bearing_quantisation = degToRad(1.0);
-  const FeatureSet quantised = extractFeatures(scan, options);
-  scan.bearing_quantisation = 0.0;
   FeatureOptions jittery = options;
-  jittery.bearing_sigma = std::hypot(options.bearing_sigma, degToRad(1.0) / std::sqrt(12.0));
+  jittery.bearing_sigma = std::hypot(options.bearing_sigma, scan.angle_increment / std::sqrt(12.0));
   const FeatureSet expected = extractFeatures(scan, jittery);
-  ASSERT_GT(quantised.countLandmarkCandidates(), 0);
-  ASSERT_EQ(quantised.points_of_interest.size(), expected.points_of_interest.size());
-  for (size_t i = 0; i < expected.points_of_interest.size(); ++i) {
-    EXPECT_EQ(quantised.points_of_interest[i].covariance,
-              expected.points_of_interest[i].covariance);
-    EXPECT_EQ(quantised.points_of_interest[i].range_bearing_covariance,
-              expected.points_of_interest[i].range_bearing_covariance);
+  scan.merged = true;
+  const FeatureSet merged = extractFeatures(scan, options);
+  int front_edges = 0, corners = 0;
+  for (const PointFeature& p : expected.points_of_interest) {
+    front_edges += p.context == EndpointContext::kFrontEdge;
+    corners += p.kind == PointKind::kCorner;
   }
-  for (size_t i = 0;
-       i < std::min(plain.points_of_interest.size(), quantised.points_of_interest.size()); ++i) {
-    if (plain.points_of_interest[i].position != quantised.points_of_interest[i].position) continue;
-    EXPECT_GT(quantised.points_of_interest[i].covariance.trace(),
-              plain.points_of_interest[i].covariance.trace());
+  ASSERT_GT(front_edges, 0) << "the scene must show an object's end against the background";
+  ASSERT_GT(corners, 0);
+  ASSERT_EQ(merged.points_of_interest.size(), expected.points_of_interest.size());
+  for (size_t i = 0; i < expected.points_of_interest.size(); ++i) {
+    const PointFeature& e = expected.points_of_interest[i];
+    const PointFeature& m = merged.points_of_interest[i];
+    if (e.context == EndpointContext::kFrontEdge) {
+      EXPECT_EQ(m.context, EndpointContext::kUnresolved);
+      EXPECT_FALSE(m.landmark_candidate);
+      continue;
+    }
+    EXPECT_EQ(m.context, e.context);
+    EXPECT_EQ(m.landmark_candidate, e.landmark_candidate);
+    EXPECT_EQ(m.covariance, e.covariance);
+    EXPECT_EQ(m.range_bearing_covariance, e.range_bearing_covariance);
   }
 }
 

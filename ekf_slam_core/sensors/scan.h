@@ -29,10 +29,13 @@ struct Scan {
   double range_min = 0.0;        // m, readings below are invalid
   double range_max = 0.0;        // m, readings at or above are invalid ("no return")
   double stamp = 0.0;            // s, acquisition time of the sweep (data time, not now())
-  // rad: the readings' bearings were rounded to beams this far apart (a
-  // merged scan, scan_merge.h), an error uniform over ±half of it that the
-  // feature extraction adds to its bearing noise; 0 for a laser's own scan.
-  double bearing_quantisation = 0.0;
+  // Readings of several lasers put into the beams of one virtual laser at
+  // the origin (scan_merge.h), false for a laser's own scan. The feature
+  // extraction then counts each bearing's rounding to its beam as noise
+  // (uniform over ±half a beam: variance angle_increment² / 12) and places
+  // no object end at an occlusion edge: the beam beyond it was not cast
+  // from where the end was seen.
+  bool merged = false;
 
   int size() const { return static_cast<int>(ranges.size()); }
   double angle(int i) const { return angle_min + i * angle_increment; }

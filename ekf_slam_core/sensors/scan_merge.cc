@@ -54,7 +54,7 @@ std::string mergeScans(const MountedScan& first, const MountedScan& second,
   out.range_min = 0.0;
   out.range_max = 0.0;
   out.stamp = first.scan->stamp;
-  out.bearing_quantisation = out.angle_increment;
+  out.merged = true;
   out.ranges.assign(beams, std::numeric_limits<double>::infinity());
 
   // Each scan's laser in the first scan's base_link.

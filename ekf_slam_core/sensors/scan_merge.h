@@ -24,9 +24,9 @@
 // mounts 0.16 m ahead of and 0.25 m behind the axle); and a surface seen by
 // one laser past the edge of a nearer object (parallax) can fill a beam the
 // origin would not see it in. A beam holds its reading's true distance; its
-// bearing is quantised to the beam (at most half an increment off: the
-// merged scan's bearing_quantisation, which the feature extraction counts
-// as noise of variance increment² / 12).
+// bearing is quantised to the beam (at most half an increment off, which
+// the feature extraction counts as noise of variance increment² / 12), and
+// an object's end beside an occlusion edge cannot be placed (Scan::merged).
 #pragma once
 
 #include <string>
