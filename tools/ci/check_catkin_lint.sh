@@ -35,6 +35,7 @@ tools/dev/landmark_comparison.sh   # make landmark-comparison: reads ../shared/d
 tools/dev/line_experiment.sh       # make line-experiment: builds a workspace of the checkout
 tools/dev/office_monte_carlo.sh    # runs the source tree's config/ and tools/ scripts
 tools/dev/localization_check.sh    # starts the source tree's tools/dev/sim_monitor.py
+tools/dev/mecp_sim_comparison.sh   # runs the source tree's config/ and tools/ci/run_sim_scored.sh
 tools/dev/stage_comparison.sh      # reads ../shared/datasets beside the checkout
 tools/dev/replay_screenshots.sh    # starts the source tree's tools/dev/rviz_screenshot.py, writes docs/images
 tools/dev/continue_mapping_check.sh # reads ../shared/datasets beside the checkout
