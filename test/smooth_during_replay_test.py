@@ -2,7 +2,8 @@
 """~smooth during a real log's replay (test/smooth_during_replay.test).
 
 Plays the first --seconds of the bag on /clock at --rate into slam.launch
-and calls ~smooth three times while it plays. ~smooth runs the full
+and calls ~smooth three times while it plays, and on until one solve has
+taken longer than MAX_PAUSE. ~smooth runs the full
 smoother over every scan so far, a solve of a second or more on a long log;
 the node runs it off the thread that takes the scans and publishes tf.
 
@@ -70,21 +71,27 @@ class SmoothDuringReplay(ReplayTest):
             while self.poses() < FIRST_CALL_AFTER and time.time() < deadline:
                 time.sleep(0.1)
             self.assertGreaterEqual(self.poses(), FIRST_CALL_AFTER, "too few poses published")
-            while len(calls) < CALLS and player.poll() is None:
+            # At least CALLS calls, and on until one solve outlasts the pause
+            # bound (the history grows as the log plays, and the solve with
+            # it): a machine quick enough to solve every call sooner shows
+            # nothing, and calling on while the log plays makes it show.
+            longest = 0.0
+            while (len(calls) < CALLS or longest <= MAX_PAUSE) and player.poll() is None:
                 start = time.time()
                 response = smooth()
                 calls.append((start, time.time(), response))
+                longest = max(longest, calls[-1][1] - start)
                 time.sleep(1.0)
         finally:
             player.wait()
         self.settle(self.poses)  # the node finishes its queue
         time.sleep(2.0)  # one more /diagnostics
 
-        self.assertEqual(len(calls), CALLS, "the log ended before %d calls" % CALLS)
+        self.assertGreaterEqual(len(calls), CALLS, "the log ended before %d calls" % CALLS)
         for start, end, response in calls:
             print("~smooth: %.3f s: %s" % (end - start, response.message))
             self.assertTrue(response.success, response.message)
-        self.assertGreaterEqual(len(self.smoothed_paths), CALLS)
+        self.assertGreaterEqual(len(self.smoothed_paths), len(calls))
         self.assertGreaterEqual(min(self.smoothed_paths), FIRST_CALL_AFTER)
 
         # map -> odom while the solves ran.
