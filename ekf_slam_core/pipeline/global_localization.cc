@@ -83,6 +83,26 @@ GlobalPlacement GlobalLocalizer::add(const std::vector<Vector2>& robot_points,
   return placement;
 }
 
+void GlobalLocalizer::restart() {
+  joined_.clear();
+  last_search_.reset();
+}
+
+double GlobalLocalizer::scoreAt(const std::vector<Vector2>& robot_points,
+                                const Pose2& map_pose) const {
+  if (!map_error_.empty()) return 0.0;
+  const std::vector<Vector2> sparse = gridThinned(robot_points, options_.search_point_spacing);
+  if (sparse.empty()) return 0.0;
+  const Pose2 graph_pose = compose(inverse(map_from_graph_), map_pose);
+  double sum = 0.0;
+  for (const Vector2& p : sparse) {
+    int ix = 0, iy = 0;
+    grid_.cellOf(transformFrom(graph_pose, p), &ix, &iy);
+    sum += grid_.fine(ix, iy);
+  }
+  return sum / static_cast<double>(sparse.size());
+}
+
 GlobalPlacement GlobalLocalizer::search(const std::vector<Vector2>& query) const {
   GlobalPlacement out;
   out.searched = true;
@@ -180,6 +200,19 @@ void placeRobot(const GlobalPlacement& place, const Matrix3& covariance, SlamSta
     state->has_front_end = false;
   }
   state->has_last_iteration = false;
+}
+
+Matrix3 placementCovariance() {
+  const double sd = 0.05, sa = degToRad(1.0);
+  return Vector3(sd * sd, sd * sd, sa * sa).asDiagonal();
+}
+
+GlobalPlacement movedOn(const GlobalPlacement& place, const Pose2& motion) {
+  GlobalPlacement moved = place;
+  moved.graph_pose = compose(place.graph_pose, motion);
+  moved.map_pose = compose(place.map_pose, motion);
+  moved.front_end_pose = compose(place.front_end_pose, motion);
+  return moved;
 }
 
 }  // namespace ekf_slam

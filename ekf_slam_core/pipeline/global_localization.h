@@ -17,6 +17,12 @@
 //   rooms alike: then more scans are needed).
 // placeRobot then moves the saved state's robot there, so that a run
 // resumed from it starts at the place found.
+//
+// A robot localising in the saved map can lose its place (carried, a wheel
+// slipping on a ramp, a start pose given wrongly): LostDetector watches how
+// well each scan fits the map where the robot is estimated to stand
+// (GlobalLocalizer::scoreAt), and when it stops fitting, the search above
+// finds the robot again.
 #pragma once
 
 #include <deque>
@@ -48,6 +54,14 @@ struct GlobalLocalizationOptions {
   double max_icp_shift = 0.3;             // m: ICP may move the search's pose this far
   double distinct_radius = 2.0;           // m: another place is this far from the best
   double max_runner_up_ratio = 0.85;      // of the best score
+  // Lost (LostDetector): lost_scans scans in a row score under lost_score
+  // where the robot is estimated to stand. A localised scan scores about
+  // as the search's min_score asks of a found place; one from elsewhere
+  // scores near nothing (the island test: above 0.8 against under 0.15).
+  // A scan of a part the saved map never saw scores low too: it starts a
+  // search, which finds nothing there and changes nothing.
+  double lost_score = 0.3;
+  int lost_scans = 5;
 
   template <class Visitor>
   void visitFields(Visitor& v) {
@@ -63,6 +77,8 @@ struct GlobalLocalizationOptions {
     v.number("max_icp_shift", max_icp_shift, Bounds::openClosed(0.0, 100.0, "m"));
     v.number("distinct_radius", distinct_radius, Bounds::openClosed(0.0, 1000.0, "m"));
     v.number("max_runner_up_ratio", max_runner_up_ratio, Bounds::openClosed(0.0, 1.0));
+    v.number("lost_score", lost_score, Bounds::closed(0.0, 1.0));
+    v.integer("lost_scans", lost_scans, Bounds::closed(1, 100000));
   }
 
   std::string validate() const;  // empty when valid, else names the bad field
@@ -103,6 +119,16 @@ class GlobalLocalizer {
   // turned retry_turn since the last search (between them: not found,
   // "waiting to move on").
   GlobalPlacement add(const std::vector<Vector2>& robot_points, const Pose2& odometry);
+  // Forgets the scans joined so far and where the last search was: the
+  // next add searches at once (a robot found lost: the scans before were
+  // taken where it no longer is).
+  void restart();
+
+  // How well the saved map explains a scan (its readings in the robot
+  // frame) with the robot at `map_pose`: the mean likelihood of its points,
+  // thinned as for a search, as a search scores a place (0 to 1). 0 when
+  // there is no map or no reading.
+  double scoreAt(const std::vector<Vector2>& robot_points, const Pose2& map_pose) const;
 
  private:
   GlobalPlacement search(const std::vector<Vector2>& query) const;
@@ -126,6 +152,33 @@ class GlobalLocalizer {
   std::optional<Pose2> last_search_;  // the odometry at the last search
 };
 
+// Whether a robot localising in a saved map is lost: fed each scan's
+// GlobalLocalizer::scoreAt at the pose the robot is estimated at, it says
+// lost once lost_scans of them in a row scored under lost_score, and stays
+// so until reset (the robot found again).
+class LostDetector {
+ public:
+  explicit LostDetector(const GlobalLocalizationOptions& options = GlobalLocalizationOptions())
+      : lost_score_(options.lost_score), lost_scans_(options.lost_scans) {}
+  // True when lost (from this scan on).
+  bool add(double score) {
+    low_in_a_row_ = score < lost_score_ ? low_in_a_row_ + 1 : 0;
+    if (low_in_a_row_ >= lost_scans_) lost_ = true;
+    return lost_;
+  }
+  bool lost() const { return lost_; }
+  void reset() {
+    lost_ = false;
+    low_in_a_row_ = 0;
+  }
+
+ private:
+  double lost_score_;
+  int lost_scans_;
+  int low_in_a_row_ = 0;
+  bool lost_ = false;
+};
+
 // Moves the saved run's robot to the place found, with the pose covariance
 // `covariance`, uncorrelated with the map: the filter's pose (map_pose),
 // the front end's (front_end_pose, on its own map; without one the front
@@ -133,5 +186,14 @@ class GlobalLocalizer {
 // graph_pose). Where the saved run stopped is forgotten: no motion is
 // taken from the saved odometry.
 void placeRobot(const GlobalPlacement& place, const Matrix3& covariance, SlamState* state);
+
+// The pose covariance a place found is given: ICP against the map places
+// the robot as well as a scan match does (5 cm, 1 deg, 1 sigma).
+Matrix3 placementCovariance();
+
+// The place found for a scan, carried on to a later one by the robot's
+// motion between them (its odometry increment): a search that took a while
+// placed a robot that has driven on since.
+GlobalPlacement movedOn(const GlobalPlacement& place, const Pose2& motion);
 
 }  // namespace ekf_slam

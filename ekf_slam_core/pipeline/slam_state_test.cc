@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <random>
 
 #include "ekf_slam_core/io/test_folder.h"
@@ -232,6 +234,95 @@ TEST_F(SlamStateFile, ARobotStartedAnywhereIsFoundInTheSavedMapAndMapsOnFromTher
   const GlobalLocalizer blind(firstHalf(drive, no_loops).state(), options.scan_matching,
                               GlobalLocalizationOptions());
   EXPECT_NE(blind.mapError().find("no key scans"), std::string::npos) << blind.mapError();
+}
+
+// The kidnapped robot: localising in the saved map (mapping off), the
+// robot is carried a quarter lap on while its odometry stands still. Its
+// scans stop fitting the map where it is estimated to stand, LostDetector
+// says lost after lost_scans of them, the search finds it from the scans
+// it sees after, and the state moved there (as the live node moves it)
+// follows the truth again.
+TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
+  const Drive drive = islandDrive();
+  const SlamState saved = firstHalf(drive).state();
+  const PipelineOptions options = islandOptions();
+  const GlobalLocalizationOptions search_options;
+  GlobalLocalizer localizer(saved, options.scan_matching, search_options);
+  ASSERT_EQ(localizer.mapError(), "");
+  const size_t half = drive.scans.size() / 2, carried = half + 30;
+  const size_t skipped = drive.scans.size() / 6;  // a quarter lap of the 1.5
+  // The scan at step i is taken at truth index truthIndex(i); the odometry
+  // does not see the carrying (the wheels were off the floor).
+  auto truthIndex = [&](size_t i) { return i < carried ? i : i + skipped; };
+  auto odometry = [&](size_t i) {
+    if (i < carried) return drive.odometry[i];
+    return compose(drive.odometry[carried - 1],
+                   between(drive.odometry[carried + skipped], drive.odometry[i + skipped]));
+  };
+  auto makePipeline = [&](const SlamState& state) {
+    auto pipeline = std::make_unique<SlamPipeline>(options);
+    EXPECT_EQ(pipeline->resume(state), "");
+    pipeline->mutableFilter().setMappingEnabled(false);
+    return pipeline;
+  };
+  std::unique_ptr<SlamPipeline> pipeline = makePipeline(saved);
+  LostDetector lost(search_options);
+  std::optional<GlobalPlacement> found;
+  Pose2 found_odometry;
+  size_t lost_at = 0, found_at = 0;
+  double lowest_localised = 1.0, highest_carried = 0.0;
+  double error_sum = 0.0, worst = 0.0;
+  size_t after = 0;
+  for (size_t i = half; i + skipped < drive.scans.size(); ++i) {
+    const size_t t = truthIndex(i);
+    if (found) {  // as the node does: at the next scan, carried on by the motion since
+      SlamState state = pipeline->state();
+      placeRobot(movedOn(*found, between(found_odometry, odometry(i))), placementCovariance(),
+                 &state);
+      pipeline = makePipeline(state);
+      found.reset();
+      lost.reset();
+    }
+    const ScanResult result = pipeline->processScan(drive.scans[t], odometry(i));
+    const std::vector<Vector2> points =
+        scanPointsInRobotFrame(drive.scans[t], kLaser, options.scan_matching);
+    if (found_at > 0) {
+      const Pose2 truth = between(drive.truth[0], drive.truth[t]);
+      const double e = (result.causal_pose.translation() - truth.translation()).norm();
+      error_sum += e;
+      worst = std::max(worst, e);
+      ++after;
+    }
+    if (!lost.lost()) {
+      const double score = localizer.scoreAt(points, result.causal_pose);
+      if (i < carried) lowest_localised = std::min(lowest_localised, score);
+      if (i >= carried && lost_at == 0) highest_carried = std::max(highest_carried, score);
+      if (lost.add(score)) {
+        lost_at = i;
+        localizer.restart();
+      }
+      continue;
+    }
+    const GlobalPlacement placement = localizer.add(points, odometry(i));
+    if (placement.found) {
+      found = placement;
+      found_odometry = odometry(i);
+      found_at = i;
+    }
+  }
+  std::cout << "scores: localised at least " << lowest_localised << ", carried at most "
+            << highest_carried << "; lost at scan " << lost_at - carried + 1
+            << " after the carrying, found " << found_at - lost_at
+            << " scans later; after: " << error_sum / std::max<size_t>(after, 1)
+            << " m mean, largest " << worst << " m over " << after << " scans\n";
+  EXPECT_GT(lowest_localised, search_options.lost_score) << "lost before it was carried";
+  ASSERT_GT(lost_at, 0u) << "never lost";
+  EXPECT_EQ(lost_at - carried + 1, static_cast<size_t>(search_options.lost_scans));
+  ASSERT_GT(found_at, 0u) << "never found again";
+  EXPECT_LE(found_at - lost_at, 20u);
+  ASSERT_GT(after, 50u);
+  EXPECT_LT(error_sum / after, 0.05);
+  EXPECT_LT(worst, 0.1);
 }
 
 TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {

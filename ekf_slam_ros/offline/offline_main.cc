@@ -463,9 +463,7 @@ std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamStat
     return "not found in the first " + std::to_string(found) +
            " scans (the last search: " + last_reason + ")";
   }
-  // Placed as well as a scan match places it: 5 cm, 1°.
-  const double sd = 0.05, sa = ekf_slam::degToRad(1.0);
-  ekf_slam::placeRobot(placement, ekf_slam::Vector3(sd * sd, sd * sd, sa * sa).asDiagonal(), state);
+  ekf_slam::placeRobot(placement, ekf_slam::placementCovariance(), state);
   std::ostringstream text;
   text.setf(std::ios::fixed);
   text.precision(3);
