@@ -11,6 +11,11 @@ void PoseHistory::add(double t, const Pose2& pose) {
   while (entries_.size() > 2 && entries_.front().first < t - span_) entries_.pop_front();
 }
 
+void PoseHistory::jump(double t, const Pose2& pose) {
+  entries_.clear();
+  entries_.emplace_back(t, pose);
+}
+
 Pose2 PoseHistory::at(double t) const {
   if (entries_.empty()) return Pose2();
   if (t <= entries_.front().first) return entries_.front().second;

@@ -19,6 +19,9 @@ class PoseHistory {
   // Appends the pose at time t (s); times must not decrease (older entries
   // than the newest are ignored). Entries older than `span` s are dropped.
   void add(double t, const Pose2& pose);
+  // The robot was put elsewhere at t (carried): the poses before are
+  // forgotten, so that no pose is interpolated between the two places.
+  void jump(double t, const Pose2& pose);
 
   // The pose at t, linearly interpolated (angle along the shorter arc);
   // clamped to the oldest / newest entry outside the stored interval.

@@ -17,6 +17,12 @@
 //   ground_truth/path   nav_msgs/Path in the SLAM map frame
 //   ground_truth/world  nav_msgs/OccupancyGrid in the SLAM map frame, latched
 // The SLAM map frame is the start pose: pose_in_map = start⁻¹ ∘ pose_in_world.
+//
+// Subscribes to ~teleport (geometry_msgs/Pose2D, in the SLAM map frame):
+// the robot is carried there at once, its wheels turning nothing (a
+// kidnapped robot); refused with a warning where the robot would touch a
+// wall.
+#include <geometry_msgs/Pose2D.h>
 #include <ros/ros.h>
 
 #include <algorithm>
@@ -197,6 +203,25 @@ int main(int argc, char** argv) {
   using Clock = std::chrono::steady_clock;
   const Clock::time_point epoch = Clock::now();
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - epoch).count(); };
+
+  // Callbacks run in the loop below (ros::spinOnce), between its steps.
+  const ros::Subscriber teleport = private_node.subscribe<geometry_msgs::Pose2D>(
+      "teleport", 1, [&](const geometry_msgs::Pose2D::ConstPtr& message) {
+        const Pose2 in_world =
+            ekf_slam::compose(start, Pose2(message->x, message->y, message->theta));
+        if (!in_world.allFinite() ||
+            !ekf_slam::sim::footprintFree(world, in_world.translation(), params.robot_radius)) {
+          ROS_WARN(
+              "simulator: teleport to (%.2f, %.2f) refused: not finite, or within "
+              "robot_radius %.2f m of a wall",
+              message->x, message->y, params.robot_radius);
+          return;
+        }
+        robot.setTruePose(in_world);
+        history.jump(seconds(), in_world);
+        ROS_INFO("simulator: the robot is carried to (%.2f, %.2f, %.2f) in the map frame",
+                 message->x, message->y, message->theta);
+      });
   const double truth_period = 1.0 / params.ground_truth_rate;
   double next_robot_step = 0.0, next_truth = 0.0;
   history.add(0.0, start);
@@ -205,6 +230,7 @@ int main(int argc, char** argv) {
   // which at 0.5 rad/s would put 2.5 mrad of error into the truth.
   ros::Time true_pose_stamp = ros::Time::now(), last_truth_stamp;
   while (ros::ok()) {
+    ros::spinOnce();
     const double now = seconds();
     if (now >= next_robot_step) {
       robot.step(now);

@@ -49,8 +49,9 @@ class SlamControl {
   virtual std::optional<SlamState> state() const = 0;
   // ~load_state: the map, key scans and graph of `state` replace the
   // running ones, at once when the laser pose is known (else at the next
-  // scan). Empty when done, else why it was refused (nothing changed).
-  virtual std::string resumeFrom(SlamState state) = 0;
+  // scan), mapping on from there or (localize_only) localising in it.
+  // Empty when done, else why it was refused (nothing changed).
+  virtual std::string resumeFrom(SlamState state, bool localize_only) = 0;
 };
 
 }  // namespace ekf_slam

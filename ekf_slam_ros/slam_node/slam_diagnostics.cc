@@ -186,6 +186,9 @@ void SlamDiagnostics::summarise(long drops, long alone, bool nis_inside,
   } else if (!nis_inside) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "average NIS outside its 95% band (filter inconsistent)");
+  } else if (sources_.relocaliser->status().lost) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "lost: the scans do not fit the saved map; searching it for the robot");
   } else if (!sources_.slam->pipeline()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first scan");
   } else {
@@ -201,6 +204,19 @@ void SlamDiagnostics::addCounts(const PipelineCounters& counters, long iteration
   if (pipeline) status.add("large moves made while paused, kept", counters.accepted_large_moves);
   status.add("localize only", sources_.slam->localizeOnly());
   status.add("relocalisations (initialpose)", sources_.services->relocalisations());
+  const Relocaliser::Status relocaliser = sources_.relocaliser->status();
+  status.add("lost: watched in the loaded state", relocaliser.watching);
+  if (relocaliser.watching) {
+    status.addf("fit to the saved map", "%.3f", relocaliser.score);
+    status.add("lost", relocaliser.lost);
+    status.add("times lost", relocaliser.times_lost);
+    status.add("times found again (global search)", relocaliser.times_found);
+    status.add("global searches", relocaliser.searches);
+    status.add("last global search",
+               relocaliser.last_search.empty() ? std::string("placed") : relocaliser.last_search);
+    if (!relocaliser.map_error.empty())
+      status.add("saved map not searchable", relocaliser.map_error);
+  }
   status.add("scans received", sources_.input->received());
   status.add("scans waiting for transforms", sources_.input->waiting());
   status.add("scans processed", pipeline ? counters.scans : 0L);

@@ -21,6 +21,7 @@
 #include "ekf_slam_ros/slam_node/input_queue.h"
 #include "ekf_slam_ros/slam_node/processing_times.h"
 #include "ekf_slam_ros/slam_node/rear_scan_merger.h"
+#include "ekf_slam_ros/slam_node/relocaliser.h"
 #include "ekf_slam_ros/slam_node/slam_control.h"
 #include "ekf_slam_ros/slam_node/slam_node_params.h"
 #include "ekf_slam_ros/slam_node/slam_services.h"
@@ -40,6 +41,7 @@ class SlamDiagnostics {
     const RearScanMerger* rear = nullptr;  // null without a rear laser
     const GridOutput* grids = nullptr;
     const SlamServices* services = nullptr;
+    const Relocaliser* relocaliser = nullptr;
   };
 
   SlamDiagnostics(ros::NodeHandle node, ros::NodeHandle private_node, const SlamNodeParams& params,

@@ -91,8 +91,10 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
                 ? nullptr
                 : std::make_unique<RearScanMerger>(node, params_, frontMount(config_), transforms_,
                                                    drops_, input_.topic())),
-      diagnostics_(node, private_node, params_, config_.pipeline,
-                   {this, &drops_, &transforms_, &input_, rear_.get(), &grids_, &services_}) {
+      relocaliser_(config_.pipeline.scan_matching, GlobalLocalizationOptions()),
+      diagnostics_(
+          node, private_node, params_, config_.pipeline,
+          {this, &drops_, &transforms_, &input_, rear_.get(), &grids_, &services_, &relocaliser_}) {
   // The saved grid stays on `map` while localising; when mapping, the live
   // grid replaces it.
   if (const std::optional<GridMapFile> grid = initialGrid(params_)) {
@@ -181,12 +183,14 @@ void SlamNode::createPipeline(const Pose2& laser_pose) {
     // A state loaded before the laser pose was known.
     pipeline_ = std::make_unique<SlamPipeline>(options);
     const std::string error = pipeline_->resume(*seed_state_);
-    seed_state_.reset();
     if (error.empty()) {
       pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
+      watchForLoss(std::move(*seed_state_));
+      seed_state_.reset();
       ROS_INFO("ekf_slam_node: load_state: going on from the loaded state");
       return;
     }
+    seed_state_.reset();
     ROS_ERROR("ekf_slam_node: load_state: %s; a new map instead", error.c_str());
   }
   if (start_pose_) {
@@ -221,6 +225,11 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   // Times the rest of this function: the pipeline and the publication.
   const SlamDiagnostics::Timing timing = diagnostics_.timeProcessing();
   const ros::Time stamp = pending.header.stamp;
+  if (pending.scan && odometry.allFinite()) {
+    if (const std::optional<GlobalPlacement> place = relocaliser_.takeFound(odometry)) {
+      relocate(*place);
+    }
+  }
   const ScanResult result =
       pending.scan ? pipeline_->processScan(*pending.scan, odometry)
                    : pipeline_->processFeatures(stamp.toSec(), *pending.features, odometry);
@@ -237,6 +246,36 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   map_to_odom_.update(compose(result.causal_pose, inverse(odometry)), stamp);
   if (result.outcome == ScanOutcome::kIterated) diagnostics_.addIteration(result);
   outputs_.publishScan(result, odometry, *pipeline_, pending.header);
+  if (pending.scan && relocaliser_.status().watching &&
+      (result.outcome == ScanOutcome::kIterated ||
+       result.outcome == ScanOutcome::kSkippedNoMotion)) {
+    relocaliser_.afterScan(
+        scanPointsInRobotFrame(*pending.scan, *laser_pose_, config_.pipeline.scan_matching),
+        odometry, result.causal_pose);
+  }
+}
+
+void SlamNode::watchForLoss(SlamState state) {
+  if (localize_only_ && params_.relocalise_when_lost) {
+    relocaliser_.watch(std::move(state));
+  } else {
+    relocaliser_.stop();
+  }
+}
+
+void SlamNode::relocate(const GlobalPlacement& place) {
+  SlamState state = pipeline_->state(describeSlamConfig(config_));
+  placeRobot(place, placementCovariance(), &state);
+  auto moved = std::make_unique<SlamPipeline>(liveOptions(*laser_pose_));
+  const std::string error = moved->resume(state);
+  if (!error.empty()) {
+    ROS_ERROR("ekf_slam_node: found again, but the state cannot be moved there: %s", error.c_str());
+    return;
+  }
+  pipeline_ = std::move(moved);
+  pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
+  ROS_WARN("ekf_slam_node: relocalised: the robot now stands at (%.2f m, %.2f m, %.1f deg)",
+           place.map_pose.x, place.map_pose.y, radToDeg(place.map_pose.theta));
 }
 
 void SlamNode::onClockJump() {
@@ -297,13 +336,14 @@ std::optional<SlamState> SlamNode::state() const {
   return pipeline_->state(describeSlamConfig(config_));
 }
 
-std::string SlamNode::resumeFrom(SlamState state) {
+std::string SlamNode::resumeFrom(SlamState state, bool localize_only) {
   if (!laser_pose_) {
     // Checked against the laser mount at the first scan.
     resetState();
     seed_map_.reset();
     start_pose_.reset();
     seed_state_ = std::move(state);
+    localize_only_ = localize_only;
     return "";
   }
   // Tried on a pipeline of its own: a refused state leaves the running one.
@@ -315,8 +355,10 @@ std::string SlamNode::resumeFrom(SlamState state) {
   seed_map_.reset();
   start_pose_.reset();
   laser_pose_ = laser;
+  localize_only_ = localize_only;
   pipeline_ = std::move(resumed);
   pipeline_->mutableFilter().setMappingEnabled(!localize_only_);
+  watchForLoss(std::move(state));
   return "";
 }
 
@@ -340,6 +382,7 @@ std::string SlamNode::setStartPose(const Pose2& pose, const Matrix3& covariance)
 
 void SlamNode::resetState() {
   pipeline_.reset();
+  relocaliser_.stop();
   ++generation_;
   if (!config_.laser_pose_given) laser_pose_.reset();  // looked up again at the next scan
   outputs_.clear();

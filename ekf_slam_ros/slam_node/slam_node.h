@@ -17,7 +17,8 @@
 // into SlamPipeline::processFeatures and the same outputs.
 // Beside the scans: GridOutput (the occupancy grid on `map`), SlamServices
 // (~pause, ~resume, ~step, ~reset, ~smooth, ~save_map, ~load_map,
-// /initialpose) and SlamDiagnostics (/diagnostics).
+// /initialpose), Relocaliser (localising in a loaded state: lost, then
+// found again by a global search) and SlamDiagnostics (/diagnostics).
 // Nothing is written back into the robot (thesis §3.4.2): the map frame
 // is a separate estimate published as map → odom (REP-105).
 // Every output is stamped with the scan's stamp (data time), so bag replay
@@ -43,6 +44,7 @@
 #include "ekf_slam_ros/slam_node/input_queue.h"
 #include "ekf_slam_ros/slam_node/map_to_odom.h"
 #include "ekf_slam_ros/slam_node/rear_scan_merger.h"
+#include "ekf_slam_ros/slam_node/relocaliser.h"
 #include "ekf_slam_ros/slam_node/scan_outputs.h"
 #include "ekf_slam_ros/slam_node/slam_control.h"
 #include "ekf_slam_ros/slam_node/slam_diagnostics.h"
@@ -72,7 +74,7 @@ class SlamNode : public SlamControl {
   std::string restart(const Pose2& pose, const Matrix3& covariance,
                       std::optional<LandmarkMapFile> prior, bool localize_only) override;
   std::optional<SlamState> state() const override;
-  std::string resumeFrom(SlamState state) override;
+  std::string resumeFrom(SlamState state, bool localize_only) override;
 
  private:
   // A released input (`odometry` odom → base_link, `laser` base_link → its
@@ -90,6 +92,12 @@ class SlamNode : public SlamControl {
   // The pose (map frame) and covariance the next pipeline starts at; empty
   // when the pose and covariance are unusable, else the problem.
   std::string setStartPose(const Pose2& pose, const Matrix3& covariance);
+  // A state just resumed: watched for a lost robot when localising in it
+  // (relocalise_when_lost), else nothing is.
+  void watchForLoss(SlamState state);
+  // The robot, lost in the loaded state, was found at `place`: the SLAM
+  // state moved there (placeRobot), on a pipeline resumed from it.
+  void relocate(const GlobalPlacement& place);
   // The clock jumped back: a new map, or the map kept as the prior of a
   // restarted filter (params.clock_jump).
   void onClockJump();
@@ -120,6 +128,7 @@ class SlamNode : public SlamControl {
   SlamServices services_;
   InputQueue input_;
   std::unique_ptr<RearScanMerger> rear_;  // null without ~rear_scan_topic
+  Relocaliser relocaliser_;               // watches a state loaded for localisation
   SlamDiagnostics diagnostics_;
 };
 

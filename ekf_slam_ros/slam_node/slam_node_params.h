@@ -63,8 +63,12 @@ struct SlamNodeParams {
   int nis_window = 100;               // matches in the NIS average on /diagnostics
   double ellipse_probability = 0.95;  // of the covariance ellipses drawn
   bool localize_only = false;         // start without adding landmarks
-  bool start_paused = false;          // drop scans until ~resume (a recorder can start first)
-  std::string initial_map;            // landmark map file loaded at start ("" none)
+  // Localising in a state loaded by ~load_state: a robot whose scans stop
+  // fitting the saved map is searched for over the whole map and moved
+  // there when found (relocaliser.h).
+  bool relocalise_when_lost = true;
+  bool start_paused = false;  // drop scans until ~resume (a recorder can start first)
+  std::string initial_map;    // landmark map file loaded at start ("" none)
   // Where the robot stands at start, in the map frame, and how sure that
   // is (variances; amcl's names): the first scan's pose.
   double initial_pose_x = 0.0, initial_pose_y = 0.0, initial_pose_a = 0.0;  // m, m, rad
@@ -115,6 +119,7 @@ struct SlamNodeParams {
     v.integer("nis_window", nis_window, Bounds::closed(1, 1000000, "matches"));
     v.number("ellipse_probability", ellipse_probability, Bounds::closed(0.01, 0.9999));
     v.flag("localize_only", localize_only);
+    v.flag("relocalise_when_lost", relocalise_when_lost);
     v.flag("start_paused", start_paused);
     v.text("initial_map", initial_map, {});
     v.number("initial_pose_x", initial_pose_x, Bounds::closed(-1e6, 1e6, "m"));

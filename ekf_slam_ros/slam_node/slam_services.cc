@@ -403,7 +403,7 @@ bool SlamServices::onLoadState(StateFile::Request& request, StateFile::Response&
   const int landmarks = state.filter.landmarkCount();
   const size_t keys = state.back_end.closer.keys.size();
   const bool done = onSpinThread([&] {
-    error = slam_.resumeFrom(std::move(state));
+    error = slam_.resumeFrom(std::move(state), request.localize_only);
     if (!error.empty()) return;
     const std_msgs::Header header = mapHeader();
     outputs_.publishLandmarkMap(slam_.landmarks().value_or(LandmarkMapFile()), header);
@@ -414,7 +414,8 @@ bool SlamServices::onLoadState(StateFile::Request& request, StateFile::Response&
   response.success = true;
   response.message = std::to_string(landmarks) + " landmarks and " + std::to_string(keys) +
                      " key scans loaded from " + request.path +
-                     "; mapping goes on where the saved run stopped";
+                     (request.localize_only ? "; localising in it from where the saved run stopped"
+                                            : "; mapping goes on where the saved run stopped");
   ROS_INFO("ekf_slam_node: load_state: %s", response.message.c_str());
   return true;
 }
