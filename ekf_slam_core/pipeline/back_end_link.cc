@@ -125,6 +125,14 @@ BackEndLinkState BackEndLink::state() const {
   out.has_map_from_graph = map_from_graph_.has_value();
   if (map_from_graph_) out.map_from_graph = *map_from_graph_;
   out.last_front_end = last_front_end_;
+  // The saved key scans' final poses go on; the new key scans' are the
+  // graph's until a final trajectory is solved (setFinalKeyPoses).
+  out.key_final = saved_key_final_;
+  for (int k = static_cast<int>(out.key_final.size());
+       !out.key_final.empty() && k < closer.keyCount(); ++k) {
+    out.key_final.push_back(map_from_graph_ ? compose(*map_from_graph_, closer.graph().pose(k))
+                                            : closer.graph().pose(k));
+  }
   return out;
 }
 
@@ -144,6 +152,7 @@ std::string BackEndLink::resume(const BackEndLinkState& state, bool same_frame) 
   landmark_scan_ =
       std::unordered_map<int, int>(state.landmark_scan.begin(), state.landmark_scan.end());
   restored_keys_ = static_cast<int>(state.closer.keys.size());
+  saved_key_final_ = state.key_final;
   map_from_graph_.reset();
   if (state.has_map_from_graph) map_from_graph_ = state.map_from_graph;
   last_front_end_ = state.last_front_end;
@@ -201,14 +210,19 @@ std::vector<IterationConstraint> BackEndLink::loopConstraints(const ScanHistory&
     const ScanRecord* from = recordOf(closer.keyScanIndex(edge.from));
     const ScanRecord* to = recordOf(closer.keyScanIndex(edge.to));
     // A loop to a key scan of a resumed state: that key scan stays where
-    // the graph has it, and the loop places the new end in the map frame.
+    // the saved run's final trajectory put it (SlamState key_final; else
+    // where the graph has it), and the loop places the new end in the map
+    // frame.
     const bool from_saved = edge.from < restored_keys_ && to != nullptr;
     const bool to_saved = edge.to < restored_keys_ && from != nullptr;
     if ((from_saved || to_saved) && map_from_graph_ && !(from_saved && to_saved)) {
       const ScanRecord& b = from_saved ? *to : *from;
       if (b.iteration < first_iteration) continue;
-      const Pose2 saved =
-          compose(*map_from_graph_, closer.graph().pose(from_saved ? edge.from : edge.to));
+      // Where the saved run's final trajectory put it, else the graph's place.
+      const int saved_key = from_saved ? edge.from : edge.to;
+      const Pose2 saved = saved_key < static_cast<int>(saved_key_final_.size())
+                              ? saved_key_final_[saved_key]
+                              : compose(*map_from_graph_, closer.graph().pose(saved_key));
       IterationConstraint c;
       c.from_iteration = IterationConstraint::kMapFrame;
       c.to_iteration = b.iteration - first_iteration;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "ekf_slam_core/io/atomic_file.h"
@@ -288,8 +289,9 @@ void describe(Archive& a, FilterState& f) {
   a.item(f.mapping_enabled);
 }
 
+// `version`: of the bytes read (the one written: kSlamStateVersion).
 template <class Archive>
-void describe(Archive& a, SlamState& s) {
+void describe(Archive& a, SlamState& s, uint32_t version) {
   a.item(s.configuration);
   a.item(s.laser_pose);
   describe(a, s.filter);
@@ -318,6 +320,7 @@ void describe(Archive& a, SlamState& s) {
   a.item(s.has_last_iteration);
   a.item(s.last_stamp);
   a.item(s.last_raw_odometry);
+  if (version >= 2) list(a, s.back_end.key_final, 24, [&](Pose2& p) { a.item(p); });
 }
 
 // What decoding cannot see field by field: the landmarks' layout in the
@@ -342,6 +345,9 @@ std::string inconsistency(const SlamState& s) {
   if (b.key_filtered.size() != b.closer.keys.size()) {
     return "the filter's poses at the key scans do not match the key scans";
   }
+  if (!b.key_final.empty() && b.key_final.size() != b.closer.keys.size()) {
+    return "the final poses of the key scans do not match the key scans";
+  }
   return "";
 }
 
@@ -350,7 +356,7 @@ std::string inconsistency(const SlamState& s) {
 std::string encodeSlamState(const SlamState& state) {
   Writer writer;
   SlamState copy = state;  // describe() takes its fields by reference
-  describe(writer, copy);
+  describe(writer, copy, kSlamStateVersion);
   const std::string& payload = writer.bytes();
   std::string out(kMagic, kMagicSize);
   putUnsigned(kSlamStateVersion, 4, &out);
@@ -366,9 +372,9 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   }
   if (bytes.size() < kHeaderSize) return "the state ends inside its header";
   const uint32_t version = static_cast<uint32_t>(getUnsigned(bytes.data() + kMagicSize, 4));
-  if (version != kSlamStateVersion) {
-    return "state format version " + std::to_string(version) + "; this build reads version " +
-           std::to_string(kSlamStateVersion) + " only";
+  if (version != kSlamStateVersion && version != 1) {
+    return "state format version " + std::to_string(version) + "; this build reads versions 1 to " +
+           std::to_string(kSlamStateVersion);
   }
   const uint64_t length = getUnsigned(bytes.data() + kMagicSize + 4, 8);
   if (length > bytes.size() - kHeaderSize || bytes.size() - kHeaderSize - length != kChecksumSize) {
@@ -381,12 +387,31 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   }
   Reader reader(payload, length);
   SlamState read;
-  describe(reader, read);
+  describe(reader, read, version);
   if (reader.ok() && !reader.atEnd()) reader.fail("bytes after the state's last field");
   if (!reader.ok()) return reader.error();
   if (const std::string problem = inconsistency(read); !problem.empty()) return problem;
   *state = std::move(read);
   return "";
+}
+
+void setFinalKeyPoses(const std::vector<StampedPose>& final_trajectory, SlamState* state) {
+  BackEndLinkState& b = state->back_end;
+  const LoopCloserState& closer = b.closer;
+  std::unordered_map<double, Pose2> at_stamp;
+  for (const StampedPose& p : final_trajectory) at_stamp.emplace(p.stamp, p.pose);  // the first
+  std::vector<Pose2> final_poses(closer.keys.size());
+  for (size_t k = 0; k < closer.keys.size(); ++k) {
+    if (const auto found = at_stamp.find(closer.keys[k].stamp); found != at_stamp.end()) {
+      final_poses[k] = found->second;
+    } else if (k < b.key_final.size()) {
+      final_poses[k] = b.key_final[k];
+    } else {
+      const Pose2 graph = closer.graph.pose(static_cast<int>(k));
+      final_poses[k] = b.has_map_from_graph ? compose(b.map_from_graph, graph) : graph;
+    }
+  }
+  b.key_final = std::move(final_poses);
 }
 
 std::string writeSlamState(const std::string& path, const SlamState& state) {

@@ -35,13 +35,15 @@
 
 #include "ekf_slam_core/filter/filter_state.h"
 #include "ekf_slam_core/filter/line_support.h"
+#include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 
 namespace ekf_slam {
 
-// The version this build writes and the only one it reads.
-constexpr uint32_t kSlamStateVersion = 1;
+// The version this build writes. It reads it and version 1 (no final
+// key-scan poses: BackEndLinkState::key_final empty).
+constexpr uint32_t kSlamStateVersion = 2;
 
 // The loop-closing back end's link to the filter (BackEndLink).
 struct BackEndLinkState {
@@ -51,6 +53,14 @@ struct BackEndLinkState {
   bool has_map_from_graph = false;
   Pose2 map_from_graph;  // the graph's frame in the map frame
   Pose2 last_front_end;  // the front end's pose at the last scan (the closer's frame)
+  // Per key scan, where the run's final trajectory put it (map frame): the
+  // full smoother's pose of its scan (ekf_slam_offline --save-state), for
+  // key scans of earlier runs what their state said. Empty when no final
+  // trajectory was solved (the live node's ~write_state). A later run's
+  // full smoother holds its loops to these key scans there, so that its
+  // trajectory fits the saved run's final one rather than the loop-closed
+  // graph's (a log mapped in two halves, docs/results.md).
+  std::vector<Pose2> key_final;
   // Set by placeRobot (global_localization.h), never saved: the robot was
   // moved, so the first new scan hangs at last_front_end whatever frame
   // the front end goes on in.
@@ -80,6 +90,12 @@ struct SlamState {
 
 // s: see SlamState::last_stamp.
 constexpr double kResumeGap = 10.0;
+
+// Fills state->back_end.key_final from a run's final trajectory (one pose
+// per scan, map frame): each key scan takes its scan's pose, found by
+// stamp; a key scan the trajectory does not hold keeps its entry, or
+// (none) takes its graph pose in the map frame.
+void setFinalKeyPoses(const std::vector<StampedPose>& final_trajectory, SlamState* state);
 
 // The file's bytes, and back. decodeSlamState leaves `state` unchanged and
 // returns the problem when the bytes are not a whole, consistent state of

@@ -325,6 +325,61 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
   EXPECT_LT(worst, 0.1);
 }
 
+// FNV-1a 64, the file's checksum, to build a version-1 file here.
+uint64_t fnv1a(const std::string& data) {
+  uint64_t hash = 14695981039346656037ULL;
+  for (const char c : data) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ULL;
+  }
+  return hash;
+}
+
+// The final key-scan poses: each key scan takes the pose the final
+// trajectory gives its scan, the others keep their graph pose in the map
+// frame; they are saved and read back, and a version-1 file (without
+// them) is read as a state without them.
+TEST_F(SlamStateFile, KeyScansTakeTheFinalTrajectorysPosesAndVersionOneStillReads) {
+  const Drive drive = islandDrive();
+  SlamState state = firstHalf(drive).state();
+  const auto& keys = state.back_end.closer.keys;
+  ASSERT_GT(keys.size(), 3u);
+  EXPECT_TRUE(state.back_end.key_final.empty()) << "no final trajectory solved yet";
+  std::vector<StampedPose> final_trajectory;
+  for (size_t k = 1; k < keys.size(); ++k) {
+    final_trajectory.push_back({keys[k].stamp, Pose2(1.0 * k, -2.0, 0.1)});
+  }
+  setFinalKeyPoses(final_trajectory, &state);
+  ASSERT_EQ(state.back_end.key_final.size(), keys.size());
+  EXPECT_EQ(state.back_end.key_final[2].x, 2.0);
+  // The first key scan is not in the trajectory: its graph pose, in the map frame.
+  const Pose2 graph_in_map =
+      compose(state.back_end.map_from_graph, state.back_end.closer.graph.pose(0));
+  EXPECT_EQ(state.back_end.key_final[0].x, graph_in_map.x);
+  SlamState read;
+  ASSERT_EQ(decodeSlamState(encodeSlamState(state), &read), "");
+  EXPECT_EQ(read.back_end.key_final.size(), keys.size());
+  EXPECT_EQ(read.back_end.key_final[2].x, 2.0);
+
+  // Version 1: the same payload without the list at its end (an empty
+  // one: its count, 8 bytes), version 1 in the header, its checksum.
+  state.back_end.key_final.clear();
+  const std::string v2 = encodeSlamState(state);
+  const size_t header = 15 + 4 + 8;
+  const std::string payload = v2.substr(header, v2.size() - header - 8 - 8);
+  std::string v1 = v2.substr(0, 15);
+  for (const uint64_t value : {uint64_t{1}, uint64_t{payload.size()}}) {
+    for (int i = 0; i < (value == 1 ? 4 : 8); ++i)
+      v1.push_back(static_cast<char>(value >> (8 * i)));
+  }
+  v1 += payload;
+  const uint64_t sum = fnv1a(payload);
+  for (int i = 0; i < 8; ++i) v1.push_back(static_cast<char>(sum >> (8 * i)));
+  ASSERT_EQ(decodeSlamState(v1, &read), "");
+  EXPECT_TRUE(read.back_end.key_final.empty());
+  EXPECT_EQ(encodeSlamState(read), v2);
+}
+
 TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
   const Drive drive = islandDrive();
   const SlamState state = firstHalf(drive).state();
@@ -342,8 +397,8 @@ TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
   corrupt[bytes.size() / 2] ^= 0x40;
   EXPECT_NE(refused(corrupt).find("checksum"), std::string::npos);
   std::string other_version = bytes;
-  other_version[15] = 2;  // the version's low byte, after the magic line
-  EXPECT_NE(refused(other_version).find("version 2"), std::string::npos) << refused(other_version);
+  other_version[15] = 3;  // the version's low byte, after the magic line
+  EXPECT_NE(refused(other_version).find("version 3"), std::string::npos) << refused(other_version);
   EXPECT_NE(refused("P5\n640 480\n").find("not a SLAM state"), std::string::npos);
   EXPECT_EQ(decodeSlamState(bytes, &read), "");
 

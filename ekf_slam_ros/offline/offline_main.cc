@@ -26,7 +26,8 @@
 // optimisation as it started; with pose_graph_scans.txt and landmark_graph_scans.txt, the scan
 // anchors that turn a solution into one pose per scan (as trajectory_optimized.txt and
 // trajectory_smoothed.txt are made from the run's own solutions). --save-state FILE writes the
-// SLAM state after the last scan (before the final optimisation), --resume FILE goes on from one
+// SLAM state after the last scan (before the final optimisation; its key scans' final poses from
+// trajectory_smoothed.txt), --resume FILE goes on from one
 // (ekf_slam_core/pipeline/slam_state.h): a log mapped in parts, a building mapped over days;
 // with --global the robot is first found in the saved map from the log's first scans
 // (ekf_slam_core/pipeline/global_localization.h), wherever it starts.
@@ -47,6 +48,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -428,10 +430,10 @@ void traceScan(double stamp, const ekf_slam::ScanResult& result, std::ofstream* 
 }
 
 // Every scan through the pipeline in file order, then the back end's final
-// optimisation.
-// With --save-state the state is written after the last scan, before that
-// optimisation (a later run goes on from the run as it stood): the problem
-// when it cannot be, else empty.
+// optimisation. With --save-state, `to_save` receives the state after the
+// last scan, before that optimisation (a later run goes on from the run as
+// it stood); it is written once the final trajectory has placed its key
+// scans (setFinalKeyPoses).
 // --global: the log's first scans searched for in the saved map, one more
 // joined at a time, until the robot is found (at most kGlobalScans); the
 // state's robot is moved there and the scans before it are left out.
@@ -478,9 +480,9 @@ std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamStat
   return "";
 }
 
-std::string runSlam(const Arguments& a, const ekf_slam::SlamConfig& config,
-                    const ekf_slam::LogData& log, std::chrono::steady_clock::time_point wall_start,
-                    ekf_slam::SlamPipeline* pipeline) {
+void runSlam(const Arguments& a, const ekf_slam::SlamConfig& config, const ekf_slam::LogData& log,
+             std::chrono::steady_clock::time_point wall_start, ekf_slam::SlamPipeline* pipeline,
+             std::optional<ekf_slam::SlamState>* to_save) {
   const bool tty = ::isatty(STDERR_FILENO);
   const size_t total = log.scans.size();
   size_t next_report = 0;
@@ -500,13 +502,8 @@ std::string runSlam(const Arguments& a, const ekf_slam::SlamConfig& config,
     }
   }
   if (tty) std::fprintf(stderr, "\n");
-  std::string error;
-  if (!a.save_state.empty()) {
-    error = ekf_slam::writeSlamState(a.save_state,
-                                     pipeline->state(ekf_slam::describeSlamConfig(config)));
-  }
+  if (!a.save_state.empty()) *to_save = pipeline->state(ekf_slam::describeSlamConfig(config));
   pipeline->finishLoopClosure();
-  return error;
 }
 
 // The trajectories of a run, one pose per scan with its header stamp.
@@ -796,13 +793,16 @@ int main(int argc, char** argv) {
     }
     if (args.localize_only) pipeline.mutableFilter().setMappingEnabled(false);
   }
-  if (const std::string error = runSlam(args, config, log, wall_start, &pipeline); !error.empty()) {
-    std::cerr << "ekf_slam_offline: " << error << "\n";
-    return 3;
-  }
+  std::optional<ekf_slam::SlamState> to_save;
+  runSlam(args, config, log, wall_start, &pipeline, &to_save);
   Trajectories trajectories;
   smooth(args, log, pipeline, &trajectories);
-  std::string error = writeResults(args.out_dir, config, log, pipeline, trajectories);
+  std::string error;
+  if (to_save) {
+    ekf_slam::setFinalKeyPoses(trajectories.smoothed, &*to_save);
+    error = ekf_slam::writeSlamState(args.save_state, *to_save);
+  }
+  if (error.empty()) error = writeResults(args.out_dir, config, log, pipeline, trajectories);
   if (args.maps && error.empty()) error = writeMaps(args.out_dir, config, log, trajectories);
   if (error.empty() && !args.export_dir.empty()) {
     error = exportGraphs(args.export_dir, pipeline, config.pipeline, trajectories.smoother_problem);
