@@ -157,9 +157,8 @@ std::string BackEndLink::resume(const BackEndLinkState& state, bool same_frame) 
   if (state.has_map_from_graph) map_from_graph_ = state.map_from_graph;
   last_front_end_ = state.last_front_end;
   front_end_offset_.reset();
-  resume_at_ = state.closer.keys.empty() || (same_frame && !state.placed)
-                   ? std::nullopt
-                   : std::optional<Pose2>(state.last_front_end);
+  resume_at_ = state.closer.keys.empty() || same_frame ? std::nullopt
+                                                       : std::optional<Pose2>(state.last_front_end);
   return "";
 }
 

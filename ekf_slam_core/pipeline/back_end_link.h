@@ -77,7 +77,9 @@ class BackEndLink {
   // to be where the saved run stopped (the front end of the new run starts
   // in a frame of its own). Empty on success, else what is inconsistent.
   // `same_frame`: the new front end goes on in the saved one's frame (its
-  // map was restored), so no offset is needed.
+  // map was restored) from where the saved run stopped, so no offset is
+  // needed (false for a robot placed elsewhere: the first new scan hangs at
+  // state.last_front_end).
   std::string resume(const BackEndLinkState& state, bool same_frame);
   // After resume(): the robot moved by `motion` (its frame) since the save.
   void resumeMovedBy(const Pose2& motion) {

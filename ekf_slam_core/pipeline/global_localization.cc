@@ -191,7 +191,6 @@ void placeRobot(const GlobalPlacement& place, const Matrix3& covariance, SlamSta
     const int last = static_cast<int>(closer.keys.size()) - 1;
     state->back_end.last_front_end =
         compose(closer.keys[last].front_end, between(closer.graph.pose(last), place.graph_pose));
-    state->back_end.placed = true;
   }
   // The front end goes on on its own map where it fits there, else afresh.
   if (place.has_front_end_pose) {

@@ -184,7 +184,8 @@ class LostDetector {
 // the front end's (front_end_pose, on its own map; without one the front
 // end starts afresh) and the back end's link (the first new scan at
 // graph_pose). Where the saved run stopped is forgotten: no motion is
-// taken from the saved odometry.
+// taken from the saved odometry. Resume the state with
+// ResumeAt::kPlacedRobot.
 void placeRobot(const GlobalPlacement& place, const Matrix3& covariance, SlamState* state);
 
 // The pose covariance a place found is given: ICP against the map places

@@ -62,7 +62,7 @@ SlamState SlamPipeline::state(const std::string& configuration) const {
   return out;
 }
 
-std::string SlamPipeline::resume(const SlamState& state) {
+std::string SlamPipeline::resume(const SlamState& state, ResumeAt at) {
   if (initialised_ || counters_.scans > 0) {
     return "a saved state can be resumed only before the first scan";
   }
@@ -79,7 +79,9 @@ std::string SlamPipeline::resume(const SlamState& state) {
   // The front end goes on in the saved frame when its map was saved, and
   // the back end then needs no offset between the two runs' frames.
   const bool same_frame = state.has_front_end && front_end_.restore(state.front_end);
-  if (const std::string error = back_end_.resume(state.back_end, same_frame); !error.empty()) {
+  if (const std::string error =
+          back_end_.resume(state.back_end, same_frame && at == ResumeAt::kWhereItStopped);
+      !error.empty()) {
     front_end_ = FrontEnd(options_);
     return error;
   }

@@ -103,7 +103,10 @@ class SlamPipeline {
   // count). Refused, with the reason, after the first scan, or when the
   // laser mount differs from options.filter.laser_pose (the key scans'
   // readings hang off it) by more than 1 cm or 0.5 degrees.
-  std::string resume(const SlamState& state);
+  // ResumeAt::kPlacedRobot: the robot was moved in the state (placeRobot,
+  // global_localization.h), so the first new scan hangs where it was put
+  // even where the front end goes on on its saved map.
+  std::string resume(const SlamState& state, ResumeAt at = ResumeAt::kWhereItStopped);
 
   // The stages, read-only.
   const FrontEnd& frontEnd() const { return front_end_; }

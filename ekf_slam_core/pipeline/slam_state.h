@@ -61,10 +61,6 @@ struct BackEndLinkState {
   // trajectory fits the saved run's final one rather than the loop-closed
   // graph's (a log mapped in two halves, docs/results.md).
   std::vector<Pose2> key_final;
-  // Set by placeRobot (global_localization.h), never saved: the robot was
-  // moved, so the first new scan hangs at last_front_end whatever frame
-  // the front end goes on in.
-  bool placed = false;
 };
 
 struct SlamState {
@@ -90,6 +86,12 @@ struct SlamState {
 
 // s: see SlamState::last_stamp.
 constexpr double kResumeGap = 10.0;
+
+// Where a resumed run's robot stands at its first scan (SlamPipeline::resume).
+enum class ResumeAt {
+  kWhereItStopped,  // where the saved run stopped (see SlamState::last_stamp)
+  kPlacedRobot,     // where placeRobot put it (global_localization.h)
+};
 
 // Fills state->back_end.key_final from a run's final trajectory (one pose
 // per scan, map frame): each key scan takes its scan's pose, found by

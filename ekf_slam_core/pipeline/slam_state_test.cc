@@ -207,7 +207,7 @@ TEST_F(SlamStateFile, ARobotStartedAnywhereIsFoundInTheSavedMapAndMapsOnFromTher
   EXPECT_TRUE(placement.has_front_end_pose);
   placeRobot(placement, Vector3(0.05 * 0.05, 0.05 * 0.05, 0.02 * 0.02).asDiagonal(), &state);
   SlamPipeline resumed(options);
-  ASSERT_EQ(resumed.resume(state), "");
+  ASSERT_EQ(resumed.resume(state, ResumeAt::kPlacedRobot), "");
   for (size_t i = found; i < drive.scans.size(); ++i) {
     Scan scan = drive.scans[i];
     scan.stamp += 86400.0;
@@ -259,13 +259,13 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
     return compose(drive.odometry[carried - 1],
                    between(drive.odometry[carried + skipped], drive.odometry[i + skipped]));
   };
-  auto makePipeline = [&](const SlamState& state) {
+  auto makePipeline = [&](const SlamState& state, ResumeAt at) {
     auto pipeline = std::make_unique<SlamPipeline>(options);
-    EXPECT_EQ(pipeline->resume(state), "");
+    EXPECT_EQ(pipeline->resume(state, at), "");
     pipeline->mutableFilter().setMappingEnabled(false);
     return pipeline;
   };
-  std::unique_ptr<SlamPipeline> pipeline = makePipeline(saved);
+  std::unique_ptr<SlamPipeline> pipeline = makePipeline(saved, ResumeAt::kWhereItStopped);
   LostDetector lost(search_options);
   std::optional<GlobalPlacement> found;
   Pose2 found_odometry;
@@ -279,7 +279,7 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
       SlamState state = pipeline->state();
       placeRobot(movedOn(*found, between(found_odometry, odometry(i))), placementCovariance(),
                  &state);
-      pipeline = makePipeline(state);
+      pipeline = makePipeline(state, ResumeAt::kPlacedRobot);
       found.reset();
       lost.reset();
     }

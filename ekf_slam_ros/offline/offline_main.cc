@@ -784,7 +784,8 @@ int main(int argc, char** argv) {
       if (!error.empty()) error = "global localisation in " + args.resume + ": " + error;
     }
     if (error.empty()) {
-      error = pipeline.resume(state);
+      error = pipeline.resume(state, args.global ? ekf_slam::ResumeAt::kPlacedRobot
+                                                 : ekf_slam::ResumeAt::kWhereItStopped);
       if (!error.empty()) error = args.resume + ": " + error;
     }
     if (!error.empty()) {

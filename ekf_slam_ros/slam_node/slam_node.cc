@@ -267,7 +267,7 @@ void SlamNode::relocate(const GlobalPlacement& place) {
   SlamState state = pipeline_->state(describeSlamConfig(config_));
   placeRobot(place, placementCovariance(), &state);
   auto moved = std::make_unique<SlamPipeline>(liveOptions(*laser_pose_));
-  const std::string error = moved->resume(state);
+  const std::string error = moved->resume(state, ResumeAt::kPlacedRobot);
   if (!error.empty()) {
     ROS_ERROR("ekf_slam_node: found again, but the state cannot be moved there: %s", error.c_str());
     return;
