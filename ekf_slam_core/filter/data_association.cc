@@ -192,20 +192,38 @@ std::vector<int> AssociationResult::newLandmarks() const {
   return out;
 }
 
+LandmarkPredictions::LandmarkPredictions(const EkfSlam& filter)
+    : filter_(filter),
+      predictions_(filter.landmarkCount()),
+      made_(static_cast<size_t>(filter.landmarkCount()), 0) {}
+
+bool LandmarkPredictions::predict(int slot) {
+  if (slot < 0 || slot >= static_cast<int>(made_.size())) return false;
+  if (made_[slot] == 0)
+    made_[slot] = filter_.predictObservation(slot, &predictions_[slot]) ? 1 : -1;
+  return made_[slot] > 0;
+}
+
 double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
-                         const std::vector<PointMatch>& pairings) {
-  std::vector<EkfSlam::Prediction> predictions(filter.landmarkCount());
+                         const std::vector<PointMatch>& pairings,
+                         LandmarkPredictions* predictions) {
   std::vector<int> obs, slots;
   for (const PointMatch& pairing : pairings) {
     const int slot = filter.slotOf(pairing.landmark_id);
     if (pairing.observation < 0 || pairing.observation >= static_cast<int>(observations.size()) ||
-        slot < 0 || !filter.predictObservation(slot, &predictions[slot])) {
+        !predictions->predict(slot)) {
       return kInfinity;
     }
     obs.push_back(pairing.observation);
     slots.push_back(slot);
   }
-  return jointDistance(filter, observations, predictions, obs, slots);
+  return jointDistance(filter, observations, predictions->bySlot(), obs, slots);
+}
+
+double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                         const std::vector<PointMatch>& pairings) {
+  LandmarkPredictions predictions(filter);
+  return jointMahalanobis2(filter, observations, pairings, &predictions);
 }
 
 AssociationResult associate(const EkfSlam& filter,

@@ -101,6 +101,26 @@ struct AssociationResult {
 double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
                          const std::vector<PointMatch>& pairings);
 
+// The landmarks' predicted observations for one filter state, each made
+// the first time it is asked for: many pairings tested in turn (a group's
+// cyclic shifts) then predict each landmark once.
+class LandmarkPredictions {
+ public:
+  explicit LandmarkPredictions(const EkfSlam& filter);
+  // False when landmark `slot` cannot be predicted (or does not exist).
+  bool predict(int slot);
+  const std::vector<EkfSlam::Prediction>& bySlot() const { return predictions_; }
+
+ private:
+  const EkfSlam& filter_;
+  std::vector<EkfSlam::Prediction> predictions_;
+  std::vector<signed char> made_;  // 0 not yet, 1 made, −1 impossible
+};
+
+// jointMahalanobis2 with the predictions of `predictions` (the same filter).
+double jointMahalanobis2(const EkfSlam& filter, const std::vector<PointObservation>& observations,
+                         const std::vector<PointMatch>& pairings, LandmarkPredictions* predictions);
+
 AssociationResult associate(const EkfSlam& filter,
                             const std::vector<PointObservation>& observations,
                             const AssociationOptions& options);

@@ -137,6 +137,8 @@ AssociationResult MecpAssociation::associate(const EkfSlam& filter,
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.normalised < b.normalised; });
 
+  // Each member's prediction made once for every shift and candidate.
+  LandmarkPredictions predictions(filter);
   const double group_gate = chiSquareQuantile(association.gate_probability, 2.0 * k);
   const double single_gate = chiSquareQuantile(association.gate_probability, 2.0);
   for (const Candidate& candidate : candidates) {
@@ -148,10 +150,11 @@ AssociationResult MecpAssociation::associate(const EkfSlam& filter,
       bool each_compatible = true;
       for (int i = 0; i < k && each_compatible; ++i) {
         pairing.push_back({last_.vertices[i], members[(i + shift) % k]});
-        each_compatible = jointMahalanobis2(filter, observations, {pairing.back()}) < single_gate;
+        each_compatible =
+            jointMahalanobis2(filter, observations, {pairing.back()}, &predictions) < single_gate;
       }
       if (!each_compatible) continue;
-      const double d2 = jointMahalanobis2(filter, observations, pairing);
+      const double d2 = jointMahalanobis2(filter, observations, pairing, &predictions);
       if (d2 < best) {
         best = d2;
         best_pairing = pairing;
@@ -182,7 +185,7 @@ AssociationResult MecpAssociation::associate(const EkfSlam& filter,
       if (before[i] != pair.landmark_id) ++counters_.mecp_pairings_changed;
       out.decision = AssociationDecision::kMatched;
       out.landmark_id = pair.landmark_id;
-      out.mahalanobis2 = jointMahalanobis2(filter, observations, {pair});
+      out.mahalanobis2 = jointMahalanobis2(filter, observations, {pair}, &predictions);
     }
     ++counters_.mecp_group_matches;
     last_.member_ids = members;
