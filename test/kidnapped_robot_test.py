@@ -1,20 +1,21 @@
 #!/usr/bin/python3
 """The kidnapped robot in the simulator (test/kidnapped_robot.test).
 
-The simulated P3-DX drives the office's bottom corridor while ekf_slam_node
-maps it (loop closure on, so the state holds key scans). Once the robot is
-MAPPED_X metres along, the test saves the state (~write_state) and loads it
-again for localisation (~load_state, localize_only). While the robot
-localises, the simulator carries it back to CARRIED_TO, its wheels turning
-nothing (~teleport): the odometry and so the published pose go on as if
-nothing happened. The test checks, against the simulator's ground truth,
-that
+The simulated P3-DX follows the carton room's waypoint loop on the SLAM
+pose while ekf_slam_node maps the room (loop closure on, so the state
+holds key scans). Once the robot has driven MAPPED_PATH metres, the test
+saves the state (~write_state) and loads it again for localisation
+(~load_state, localize_only). While the robot localises, the simulator
+carries it to the corner of the loop farther from it, turned half round,
+its wheels turning nothing (~teleport): the odometry and so the published
+pose go on as if nothing happened. The test checks, against the
+simulator's ground truth, that
   - before the carrying the node localises in the loaded map (its scans fit
     it: "fit to the saved map" on /diagnostics above the lost threshold),
   - the node reports lost, and is found again by its global search, within
     FOUND_WITHIN seconds of the carrying (/diagnostics),
   - the pose it then publishes is within PLACED_WITHIN of the truth.
-About a minute and a half.
+About 40 s.
 """
 import math
 import os
@@ -33,8 +34,12 @@ from nav_msgs.msg import Odometry
 
 from ekf_slam_tools.se2 import compose, interpolate, inverse, yaw_of
 
-MAPPED_X = 9.0  # m along the corridor (map frame) before the state is saved
-CARRIED_TO = (1.0, 0.25, 0.0)  # map frame: near the start, on the corridor's line, heading on
+WORLD = "carton_layout"
+MAPPED_PATH = 6.0  # m driven before the state is saved
+# Map frame: two corners of the waypoint loop (config/waypoints/carton_loop.yaml),
+# each turned half round from the way the loop passes it; the robot is
+# carried to the one farther from where it is.
+CORNERS = [(3.8, -0.45, math.pi / 2), (0.5, 0.35, -math.pi / 2)]
 FOUND_WITHIN = 10.0  # s after the carrying
 PLACED_WITHIN = 0.3  # m from the truth, once found
 NODE = "/ekf_slam"
@@ -53,8 +58,9 @@ class KidnappedRobot(unittest.TestCase):
     def setUp(self):
         rospy.init_node("kidnapped_robot_test")
         self.lock = threading.Lock()
-        self.start = world_start("office")
+        self.start = world_start(WORLD)
         self.truth = []  # [(stamp, x, y, theta)] in the map frame, the last few seconds
+        self.driven = 0.0  # m, along the truth
         self.pose = None  # (stamp, pose), the node's
         self.diagnostics = {}
         rospy.Subscriber("/ground_truth/odom", Odometry, self.on_truth, queue_size=10)
@@ -67,6 +73,8 @@ class KidnappedRobot(unittest.TestCase):
         world = (p.position.x, p.position.y, yaw_of(p.orientation))
         pose = compose(inverse(self.start), world)
         with self.lock:
+            if self.truth:
+                self.driven += math.hypot(pose[0] - self.truth[-1][1], pose[1] - self.truth[-1][2])
             self.truth.append((message.header.stamp.to_sec(),) + pose)
             del self.truth[:-500]
 
@@ -110,10 +118,10 @@ class KidnappedRobot(unittest.TestCase):
         return self.error()
 
     def test_lost_and_found_again(self):
-        self.assertTrue(self.wait_for(lambda: self.truth and self.truth[-1][1] > MAPPED_X,
-                                      180.0), "the robot did not reach x = %.1f m" % MAPPED_X)
+        self.assertTrue(self.wait_for(lambda: self.driven > MAPPED_PATH, 120.0),
+                        "the robot did not drive %.1f m" % MAPPED_PATH)
         folder = tempfile.mkdtemp(prefix="kidnapped_robot_")
-        path = os.path.join(folder, "corridor.state")
+        path = os.path.join(folder, "room.state")
         rospy.wait_for_service(NODE + "/write_state", 10.0)
         written = rospy.ServiceProxy(NODE + "/write_state", StateFile)(StateFileRequest(path=path))
         self.assertTrue(written.success, written.message)
@@ -133,8 +141,11 @@ class KidnappedRobot(unittest.TestCase):
 
         lost_before = int(self.value("times lost"))
         found_before = int(self.value("times found again (global search)"))
+        with self.lock:
+            here = self.truth[-1][1:3]
+        to = max(CORNERS, key=lambda c: math.hypot(c[0] - here[0], c[1] - here[1]))
         carried_at = time.time()
-        self.teleport.publish(Pose2D(x=CARRIED_TO[0], y=CARRIED_TO[1], theta=CARRIED_TO[2]))
+        self.teleport.publish(Pose2D(x=to[0], y=to[1], theta=to[2]))
         self.assertTrue(self.wait_for(lambda: int(self.value("times lost")) > lost_before,
                                       FOUND_WITHIN),
                         "never reported lost: %s" % self.diagnostics)
@@ -148,10 +159,11 @@ class KidnappedRobot(unittest.TestCase):
         # The next poses are published from the place found.
         time.sleep(1.0)
         error_after = self.measured_error()
-        print("before the carrying: fit %.3f, error %.3f m; lost %.1f s after it, found %.1f s "
-              "after it (%s global searches); then %.3f m from the truth"
-              % (fit_before, error_before, lost_after, found_after,
-                 self.value("global searches"), error_after))
+        print("before the carrying: fit %.3f, error %.3f m; carried %.1f m to (%.1f, %.1f); lost "
+              "%.1f s after it, found %.1f s after it (%s global searches); then %.3f m from "
+              "the truth" % (fit_before, error_before, math.hypot(to[0] - here[0], to[1] - here[1]),
+                             to[0], to[1], lost_after, found_after,
+                             self.value("global searches"), error_after))
         self.assertLess(error_after, PLACED_WITHIN)
         self.assertEqual(self.value("lost"), "False")
 

@@ -88,19 +88,15 @@ void GlobalLocalizer::restart() {
   last_search_.reset();
 }
 
-double GlobalLocalizer::scoreAt(const std::vector<Vector2>& robot_points,
+double GlobalLocalizer::fitNear(const std::vector<Vector2>& robot_points,
                                 const Pose2& map_pose) const {
   if (!map_error_.empty()) return 0.0;
   const std::vector<Vector2> sparse = gridThinned(robot_points, options_.search_point_spacing);
   if (sparse.empty()) return 0.0;
   const Pose2 graph_pose = compose(inverse(map_from_graph_), map_pose);
-  double sum = 0.0;
-  for (const Vector2& p : sparse) {
-    int ix = 0, iy = 0;
-    grid_.cellOf(transformFrom(graph_pose, p), &ix, &iy);
-    sum += grid_.fine(ix, iy);
-  }
-  return sum / static_cast<double>(sparse.size());
+  return correlativeSearch(sparse, grid_, graph_pose, options_.fit_window, options_.fit_angle,
+                           options_.correlative)
+      .score;
 }
 
 GlobalPlacement GlobalLocalizer::search(const std::vector<Vector2>& query) const {

@@ -21,7 +21,7 @@
 // A robot localising in the saved map can lose its place (carried, a wheel
 // slipping on a ramp, a start pose given wrongly): LostDetector watches how
 // well each scan fits the map where the robot is estimated to stand
-// (GlobalLocalizer::scoreAt), and when it stops fitting, the search above
+// (GlobalLocalizer::fitNear), and when it stops fitting, the search above
 // finds the robot again.
 #pragma once
 
@@ -54,14 +54,18 @@ struct GlobalLocalizationOptions {
   double max_icp_shift = 0.3;             // m: ICP may move the search's pose this far
   double distinct_radius = 2.0;           // m: another place is this far from the best
   double max_runner_up_ratio = 0.85;      // of the best score
-  // Lost (LostDetector): lost_scans scans in a row score under lost_score
-  // where the robot is estimated to stand. A localised scan scores about
-  // as the search's min_score asks of a found place; one from elsewhere
-  // scores near nothing (the island test: above 0.8 against under 0.15).
-  // A scan of a part the saved map never saw scores low too: it starts a
-  // search, which finds nothing there and changes nothing.
+  // Lost (LostDetector): lost_scans scans in a row fit under lost_score
+  // near where the robot is estimated to stand (fitNear: the best place
+  // within fit_window and fit_angle, so that a robot localised a few
+  // centimetres or a degree off, as a causal estimate is, still fits).
+  // A localised scan fits about as the search's min_score asks of a found
+  // place; one from metres away fits near nothing. A scan of a part the
+  // saved map never saw fits badly too: it starts a search, which finds
+  // nothing there and changes nothing.
   double lost_score = 0.3;
   int lost_scans = 5;
+  double fit_window = 0.15;  // m
+  double fit_angle = 0.05;   // rad
 
   template <class Visitor>
   void visitFields(Visitor& v) {
@@ -79,6 +83,8 @@ struct GlobalLocalizationOptions {
     v.number("max_runner_up_ratio", max_runner_up_ratio, Bounds::openClosed(0.0, 1.0));
     v.number("lost_score", lost_score, Bounds::closed(0.0, 1.0));
     v.integer("lost_scans", lost_scans, Bounds::closed(1, 100000));
+    v.number("fit_window", fit_window, Bounds::closed(0.0, 100.0, "m"));
+    v.number("fit_angle", fit_angle, Bounds::closed(0.0, kPi, "rad"));
   }
 
   std::string validate() const;  // empty when valid, else names the bad field
@@ -125,10 +131,10 @@ class GlobalLocalizer {
   void restart();
 
   // How well the saved map explains a scan (its readings in the robot
-  // frame) with the robot at `map_pose`: the mean likelihood of its points,
-  // thinned as for a search, as a search scores a place (0 to 1). 0 when
-  // there is no map or no reading.
-  double scoreAt(const std::vector<Vector2>& robot_points, const Pose2& map_pose) const;
+  // frame) near `map_pose`: the best mean likelihood of its points, thinned
+  // as for a search, within fit_window and fit_angle of it, as a search
+  // scores a place (0 to 1). 0 when there is no map or no reading.
+  double fitNear(const std::vector<Vector2>& robot_points, const Pose2& map_pose) const;
 
  private:
   GlobalPlacement search(const std::vector<Vector2>& query) const;
@@ -153,7 +159,7 @@ class GlobalLocalizer {
 };
 
 // Whether a robot localising in a saved map is lost: fed each scan's
-// GlobalLocalizer::scoreAt at the pose the robot is estimated at, it says
+// GlobalLocalizer::fitNear near the pose the robot is estimated at, it says
 // lost once lost_scans of them in a row scored under lost_score, and stays
 // so until reset (the robot found again).
 class LostDetector {

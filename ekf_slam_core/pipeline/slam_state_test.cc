@@ -294,7 +294,7 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
       ++after;
     }
     if (!lost.lost()) {
-      const double score = localizer.scoreAt(points, result.causal_pose);
+      const double score = localizer.fitNear(points, result.causal_pose);
       if (i < carried) lowest_localised = std::min(lowest_localised, score);
       if (i >= carried && lost_at == 0) highest_carried = std::max(highest_carried, score);
       if (lost.add(score)) {

@@ -46,6 +46,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -480,9 +481,52 @@ std::string placeGlobally(const ekf_slam::SlamConfig& config, ekf_slam::SlamStat
   return "";
 }
 
+// --localize-only in a state with key scans: how each scan fits the saved
+// map where the robot is estimated to stand, and the lost spells the live
+// node's detector (relocalise_when_lost) would start on this log: lost
+// after lost_scans in a row under lost_score, found again (here) once a
+// scan fits again.
+struct FitWatch {
+  explicit FitWatch(const ekf_slam::SlamState& state, const ekf_slam::SlamConfig& config)
+      : map(state, config.pipeline.scan_matching, ekf_slam::GlobalLocalizationOptions()) {}
+  void add(const ekf_slam::Scan& scan, const ekf_slam::SlamConfig& config,
+           const ekf_slam::ScanResult& result) {
+    if (result.outcome != ekf_slam::ScanOutcome::kIterated &&
+        result.outcome != ekf_slam::ScanOutcome::kSkippedNoMotion) {
+      return;
+    }
+    const double score =
+        map.fitNear(ekf_slam::scanPointsInRobotFrame(scan, config.pipeline.filter.laser_pose,
+                                                     config.pipeline.scan_matching),
+                    result.causal_pose);
+    scores.push_back(score);
+    stamps.push_back(scan.stamp);
+    const bool was_lost = lost.lost();
+    if (lost.add(score) && !was_lost) ++spells;
+    if (lost.lost() && score >= ekf_slam::GlobalLocalizationOptions().lost_score) lost.reset();
+  }
+  ekf_slam::GlobalLocalizer map;
+  ekf_slam::LostDetector lost;
+  std::vector<double> scores, stamps;
+  long spells = 0;
+};
+
+// The report's line of FitWatch.
+void reportFit(const FitWatch& fit, std::ostream& report) {
+  std::vector<double> sorted = fit.scores;
+  std::sort(sorted.begin(), sorted.end());
+  const ekf_slam::GlobalLocalizationOptions options;
+  const long under =
+      std::lower_bound(sorted.begin(), sorted.end(), options.lost_score) - sorted.begin();
+  report << "fit to the saved map (--localize-only): median " << sorted[sorted.size() / 2]
+         << ", 5 % of scans under " << sorted[sorted.size() / 20] << "; " << under << " of "
+         << sorted.size() << " scans under " << options.lost_score << ", " << fit.spells
+         << " lost spells (" << options.lost_scans << " scans in a row under it)\n";
+}
+
 void runSlam(const Arguments& a, const ekf_slam::SlamConfig& config, const ekf_slam::LogData& log,
              std::chrono::steady_clock::time_point wall_start, ekf_slam::SlamPipeline* pipeline,
-             std::optional<ekf_slam::SlamState>* to_save) {
+             std::optional<ekf_slam::SlamState>* to_save, FitWatch* fit) {
   const bool tty = ::isatty(STDERR_FILENO);
   const size_t total = log.scans.size();
   size_t next_report = 0;
@@ -491,6 +535,7 @@ void runSlam(const Arguments& a, const ekf_slam::SlamConfig& config, const ekf_s
   for (size_t i = 0; i < total; ++i) {
     const ekf_slam::ScanResult result =
         pipeline->processScan(log.scans[i].scan, log.scans[i].odometry);
+    if (fit != nullptr) fit->add(log.scans[i].scan, config, result);
     if (a.trace && result.outcome == ekf_slam::ScanOutcome::kIterated) {
       traceScan(log.scans[i].scan.stamp, result, &trace);
     }
@@ -776,6 +821,7 @@ int main(int argc, char** argv) {
   }
   ekf_slam::SlamPipeline pipeline(config.pipeline);
   std::string global_line;
+  std::optional<FitWatch> fit;
   if (!args.resume.empty()) {
     ekf_slam::SlamState state;
     std::string error = ekf_slam::readSlamState(args.resume, &state);
@@ -792,10 +838,14 @@ int main(int argc, char** argv) {
       std::cerr << "ekf_slam_offline: cannot resume: " << error << "\n";
       return 2;
     }
-    if (args.localize_only) pipeline.mutableFilter().setMappingEnabled(false);
+    if (args.localize_only) {
+      pipeline.mutableFilter().setMappingEnabled(false);
+      fit.emplace(state, config);
+      if (!fit->map.mapError().empty()) fit.reset();  // no key scans to fit
+    }
   }
   std::optional<ekf_slam::SlamState> to_save;
-  runSlam(args, config, log, wall_start, &pipeline, &to_save);
+  runSlam(args, config, log, wall_start, &pipeline, &to_save, fit ? &*fit : nullptr);
   Trajectories trajectories;
   smooth(args, log, pipeline, &trajectories);
   std::string error;
@@ -820,6 +870,22 @@ int main(int argc, char** argv) {
   report.precision(3);
   reportInput(args, config, log, report);
   if (!global_line.empty()) report << global_line << "\n";
+  if (fit && !fit->scores.empty()) {
+    reportFit(*fit, report);
+    std::ostringstream text;
+    text.setf(std::ios::fixed);
+    text << "# stamp fit: each scan's fit to the saved map near its causal pose\n";
+    for (size_t k = 0; k < fit->scores.size(); ++k) {
+      text << std::setprecision(6) << fit->stamps[k] << " " << std::setprecision(3)
+           << fit->scores[k] << "\n";
+    }
+    const std::string error =
+        ekf_slam::writeFileAtomically(args.out_dir + "/fit_to_saved_map.txt", text.str());
+    if (!error.empty()) {
+      std::cerr << "ekf_slam_offline: " << error << "\n";
+      return 3;
+    }
+  }
   reportFrontAndBackEnd(config, pipeline, report);
   reportLandmarks(config, pipeline, report);
   reportSmoother(trajectories, config.pipeline.smoother.method, report);

@@ -60,8 +60,8 @@ void Relocaliser::afterScan(const std::vector<Vector2>& robot_points, const Pose
   }
   bool restart = false;
   if (!lost_.lost()) {
-    // scoreAt reads only the built map, which the search thread never changes.
-    const double score = localizer->scoreAt(robot_points, map_pose);
+    // fitNear reads only the built map, which the search thread never changes.
+    const double score = localizer->fitNear(robot_points, map_pose);
     const bool lost = lost_.add(score);
     std::lock_guard<std::mutex> lock(mutex_);
     status_.score = score;

@@ -2,8 +2,8 @@
 // with localize_only): a kidnapped robot, carried elsewhere, or one started
 // where the state's robot did not stop.
 //
-// Each processed scan is scored against the saved map at the pose the node
-// publishes (GlobalLocalizer::scoreAt); when lost_scans in a row fit it
+// Each processed scan is scored against the saved map near the pose the node
+// publishes (GlobalLocalizer::fitNear); when lost_scans in a row fit it
 // under lost_score (LostDetector) the robot is lost, and its scans go to a
 // search thread (GlobalLocalizer::add: the whole map at every heading,
 // seconds on a large building) until a place is found. The node takes the

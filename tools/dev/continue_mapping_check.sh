@@ -12,7 +12,9 @@
 #   tools/dev/continue_mapping_check.sh DEVEL_DIR [OUT_DIR]
 # DATASETS="intel aces" by default; results in OUT_DIR (default
 # output/continue_mapping/): continue_mapping.md, and per log the runs'
-# folders. Exit code 1 when a half-and-half error exceeds the one run's by
+# folders, and below the table the localised runs' fit to the saved map
+# (tools/analysis/fit_outside_map.py: where the scans that do not fit were
+# taken). Exit code 1 when a half-and-half error exceeds the one run's by
 # more than 5 %.
 set -euo pipefail
 devel=${1:?usage: continue_mapping_check.sh DEVEL_DIR [OUT_DIR]}
@@ -37,6 +39,7 @@ mean() {  # relations trajectory -> mean translation error (m) over the relation
 }
 
 failed=0
+fits=()
 for name in ${DATASETS:-intel aces}; do
   bag=$data/$name.orig.bag
   relations=$data/$name.relations
@@ -85,7 +88,17 @@ for name in ${DATASETS:-intel aces}; do
     found="- ($(tail -n 1 "$dir/global.log"))"
   fi
   echo "$row ${loops_first:-?}, ${loops_second:-?} | $one_half / $localised / $global | $found |" >> "$table"
+  # The localised run's fit to the saved map (what the live node's lost
+  # detector watches), and where the scans that do not fit were taken.
+  fit_line=$(sed -n 's/^fit to the saved map (--localize-only): //p' "$dir/localised/report.txt")
+  outside=$(/usr/bin/python3 "$root/tools/analysis/fit_outside_map.py" \
+    "$dir/localised/fit_to_saved_map.txt" "$dir/whole/trajectory_smoothed.txt")
+  fits+=("- $name, the second half localised: $fit_line; $outside")
 done
 echo
+{
+  echo
+  printf '%s\n' "${fits[@]}"
+} >> "$table"
 cat "$table"
 exit $failed
