@@ -110,6 +110,12 @@ class BadParameters(unittest.TestCase):
         self.check("ekf_slam_node", "/nonexistent/landmarks.yaml",
                    "_initial_map:=/nonexistent/landmarks.yaml")
 
+    def test_unreadable_initial_state_is_reported(self):
+        self.check("ekf_slam_node", "/nonexistent/lab.state", "_initial_state:=/nonexistent/lab.state")
+        # One saved map or the other, not both.
+        self.check("ekf_slam_node", "initial_state", "_initial_state:=/tmp/lab.state",
+                   "_initial_map:=/tmp/lab.yaml")
+
     def test_a_bad_start_pose_names_the_key(self):
         self.check("ekf_slam_node", "initial_cov_xx", "_initial_cov_xx:=-1.0")
         self.check("ekf_slam_node", "initial_pose_a", "_initial_pose_a:=100.0")

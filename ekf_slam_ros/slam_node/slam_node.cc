@@ -115,6 +115,17 @@ SlamNode::SlamNode(ros::NodeHandle node, ros::NodeHandle private_node, const Sla
         start.x, start.y, radToDeg(start.theta), std::sqrt(params_.initial_cov_xx),
         std::sqrt(params_.initial_cov_yy), radToDeg(std::sqrt(params_.initial_cov_aa)));
   }
+  if (!params_.initial_state.empty()) {
+    SlamState state;
+    std::string error = readSlamState(params_.initial_state, &state);
+    const int landmarks = state.filter.landmarkCount();
+    const size_t keys = state.back_end.closer.keys.size();
+    if (error.empty()) error = resumeFrom(std::move(state), localize_only_);
+    if (!error.empty()) throw std::runtime_error("initial_state: " + error);
+    ROS_INFO("ekf_slam_node: %d landmarks and %zu key scans from %s%s", landmarks, keys,
+             params_.initial_state.c_str(),
+             localize_only_ ? " (localisation only; a lost robot is searched for)" : "");
+  }
   if (params_.map_update_interval > 0.0 && !liveMap(params_, config_)) {
     ROS_INFO(
         "ekf_slam_node: no live grid on `map`: features carry no readings and loop closure "

@@ -108,6 +108,9 @@ ParamProblems SlamNodeParams::problems() const {
       out.emplace_back("rear_scan_topic", "must differ from scan_topic (" + scan_topic + ")");
     }
   }
+  if (!initial_map.empty() && !initial_state.empty()) {
+    out.emplace_back("initial_state", "give initial_map or initial_state, not both");
+  }
   if (map_frame == odom_frame) out.emplace_back("map_frame", "must differ from odom_frame");
   if (odom_frame == base_frame) out.emplace_back("base_frame", "must differ from odom_frame");
   return out;

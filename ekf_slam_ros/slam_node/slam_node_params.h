@@ -69,6 +69,9 @@ struct SlamNodeParams {
   bool relocalise_when_lost = true;
   bool start_paused = false;  // drop scans until ~resume (a recorder can start first)
   std::string initial_map;    // landmark map file loaded at start ("" none)
+  // A SLAM state (~write_state, ekf_slam_offline --save-state) loaded at
+  // start, as ~load_state with localize_only as set ("" none).
+  std::string initial_state;
   // Where the robot stands at start, in the map frame, and how sure that
   // is (variances; amcl's names): the first scan's pose.
   double initial_pose_x = 0.0, initial_pose_y = 0.0, initial_pose_a = 0.0;  // m, m, rad
@@ -122,6 +125,7 @@ struct SlamNodeParams {
     v.flag("relocalise_when_lost", relocalise_when_lost);
     v.flag("start_paused", start_paused);
     v.text("initial_map", initial_map, {});
+    v.text("initial_state", initial_state, {});
     v.number("initial_pose_x", initial_pose_x, Bounds::closed(-1e6, 1e6, "m"));
     v.number("initial_pose_y", initial_pose_y, Bounds::closed(-1e6, 1e6, "m"));
     v.number("initial_pose_a", initial_pose_a, Bounds::closed(-2.0 * kPi, 2.0 * kPi, "rad"));
