@@ -100,6 +100,11 @@ std::optional<GlobalPlacement> Relocaliser::takeFound(const Pose2& odometry) {
   return place;
 }
 
+bool Relocaliser::watching() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return status_.watching;
+}
+
 Relocaliser::Status Relocaliser::status() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return status_;

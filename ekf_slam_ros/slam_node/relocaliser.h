@@ -59,6 +59,8 @@ class Relocaliser {
     std::string map_error;    // the watched state cannot be searched: why
   };
   Status status() const;
+  // A saved map is watched (status().watching, without copying the rest).
+  bool watching() const;
 
  private:
   struct Job {

@@ -257,7 +257,7 @@ void SlamNode::process(const PendingInput& pending, const Pose2& odometry, const
   map_to_odom_.update(compose(result.causal_pose, inverse(odometry)), stamp);
   if (result.outcome == ScanOutcome::kIterated) diagnostics_.addIteration(result);
   outputs_.publishScan(result, odometry, *pipeline_, pending.header);
-  if (pending.scan && relocaliser_.status().watching &&
+  if (pending.scan && relocaliser_.watching() &&
       (result.outcome == ScanOutcome::kIterated ||
        result.outcome == ScanOutcome::kSkippedNoMotion)) {
     relocaliser_.afterScan(
