@@ -587,6 +587,7 @@ LoopCloserState LoopCloser::state() const {
     k.wall_direction = key.wall_direction;
     out.keys.push_back(std::move(k));
   }
+  out.scans = scans_;
   out.graph = graph_;
   out.adjacency = adjacency_;
   out.heading_edges.assign(heading_edges_.begin(), heading_edges_.end());
@@ -630,6 +631,12 @@ std::string LoopCloser::resume(const LoopCloserState& state) {
   if (state.has_hypothesis && (!is_key(state.hypothesis_from) || !is_key(state.hypothesis_to))) {
     return "the pending loop names a missing key scan";
   }
+  if (static_cast<long>(state.scans.size()) > state.scan_count) {
+    return "more scan entries than scans";
+  }
+  for (const LoopCloserState::ScanEntry& entry : state.scans) {
+    if (entry.key < -1 || entry.key >= keys) return "a scan hangs off a missing key scan";
+  }
   int last_scan = -1;
   for (const LoopCloserState::Key& k : state.keys) {
     if (k.scan_index <= last_scan || k.scan_index >= state.scan_count) {
@@ -658,8 +665,8 @@ std::string LoopCloser::resume(const LoopCloserState& state) {
   distances_from_ = -1;
   heading_edges_ = std::unordered_set<int>(state.heading_edges.begin(), state.heading_edges.end());
   counters_ = state.counters;
-  scans_.clear();
-  first_scan_ = state.scan_count;
+  scans_ = state.scans;
+  first_scan_ = state.scan_count - static_cast<int>(state.scans.size());
   next_attempt_ = state.next_attempt;
   heading_loops_since_optimisation_ = state.heading_loops_since_optimisation;
   hypothesis_.reset();

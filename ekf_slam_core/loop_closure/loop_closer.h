@@ -279,6 +279,14 @@ struct LoopCloserState {
     double wall_direction = std::numeric_limits<double>::quiet_NaN();
   };
   std::vector<Key> keys;
+  // The newest scans' entries (scanPoses(): each hangs off a key scan),
+  // scans scan_count − scans.size() to scan_count − 1.
+  struct ScanEntry {
+    double stamp = 0.0;
+    int key = -1;  // the key scan it hangs off (−1 before the first)
+    Pose2 offset;  // front-end increment from that key scan
+  };
+  std::vector<ScanEntry> scans;
   PoseGraph graph;
   // Per key scan: its neighbours in graph distance and the travel to each.
   std::vector<std::vector<std::pair<int, double>>> adjacency;
@@ -379,11 +387,7 @@ class LoopCloser {
   };
   void addHeadingLoop(int key);
   int heading_loops_since_optimisation_ = 0;
-  struct ScanEntry {
-    double stamp;
-    int key;       // key scan it hangs off (-1 before the first)
-    Pose2 offset;  // front-end increment from that key scan
-  };
+  using ScanEntry = LoopCloserState::ScanEntry;
 
   void addKeyScan(double stamp, const std::vector<Vector2>& points, const Pose2& front_end);
   // False when the consistency test refused it (the graph is then as before).

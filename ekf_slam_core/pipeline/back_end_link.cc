@@ -125,14 +125,7 @@ BackEndLinkState BackEndLink::state() const {
   out.has_map_from_graph = map_from_graph_.has_value();
   if (map_from_graph_) out.map_from_graph = *map_from_graph_;
   out.last_front_end = last_front_end_;
-  // The saved key scans' final poses go on; the new key scans' are the
-  // graph's until a final trajectory is solved (setFinalKeyPoses).
-  out.key_final = saved_key_final_;
-  for (int k = static_cast<int>(out.key_final.size());
-       !out.key_final.empty() && k < closer.keyCount(); ++k) {
-    out.key_final.push_back(map_from_graph_ ? compose(*map_from_graph_, closer.graph().pose(k))
-                                            : closer.graph().pose(k));
-  }
+  out.record_of_loop_scan = record_of_loop_scan_;
   return out;
 }
 
@@ -144,15 +137,15 @@ std::string BackEndLink::resume(const BackEndLinkState& state, bool same_frame) 
   if (const std::string error = back_end_->resume(state.closer); !error.empty()) return error;
   view_ = back_end_->newestView();
   loops_seen_ = view_->counters.accepted;
-  record_of_loop_scan_.clear();
-  first_loop_scan_ = state.closer.scan_count;
+  // The saved scans' history records (with the history restored, loops to
+  // the saved key scans join their iterations in the full smoother).
+  record_of_loop_scan_ = state.record_of_loop_scan;
+  first_loop_scan_ = state.closer.scan_count - static_cast<int>(record_of_loop_scan_.size());
   key_filtered_ = state.key_filtered;
   pending_filtered_.clear();
   pending_base_ = state.closer.scan_count;
   landmark_scan_ =
       std::unordered_map<int, int>(state.landmark_scan.begin(), state.landmark_scan.end());
-  restored_keys_ = static_cast<int>(state.closer.keys.size());
-  saved_key_final_ = state.key_final;
   map_from_graph_.reset();
   if (state.has_map_from_graph) map_from_graph_ = state.map_from_graph;
   last_front_end_ = state.last_front_end;
@@ -208,30 +201,6 @@ std::vector<IterationConstraint> BackEndLink::loopConstraints(const ScanHistory&
     if (!edge.robust || !edge.active) continue;  // sequential edge, or a dropped loop
     const ScanRecord* from = recordOf(closer.keyScanIndex(edge.from));
     const ScanRecord* to = recordOf(closer.keyScanIndex(edge.to));
-    // A loop to a key scan of a resumed state: that key scan stays where
-    // the saved run's final trajectory put it (SlamState key_final; else
-    // where the graph has it), and the loop places the new end in the map
-    // frame.
-    const bool from_saved = edge.from < restored_keys_ && to != nullptr;
-    const bool to_saved = edge.to < restored_keys_ && from != nullptr;
-    if ((from_saved || to_saved) && map_from_graph_ && !(from_saved && to_saved)) {
-      const ScanRecord& b = from_saved ? *to : *from;
-      if (b.iteration < first_iteration) continue;
-      // Where the saved run's final trajectory put it, else the graph's place.
-      const int saved_key = from_saved ? edge.from : edge.to;
-      const Pose2 saved = saved_key < static_cast<int>(saved_key_final_.size())
-                              ? saved_key_final_[saved_key]
-                              : compose(*map_from_graph_, closer.graph().pose(saved_key));
-      IterationConstraint c;
-      c.from_iteration = IterationConstraint::kMapFrame;
-      c.to_iteration = b.iteration - first_iteration;
-      c.to_offset = between(b.odometry_at_iteration, b.odometry);
-      c.measurement =
-          from_saved ? compose(saved, edge.measurement) : compose(saved, inverse(edge.measurement));
-      c.information = edge.information;
-      out.push_back(c);
-      continue;
-    }
     if (from == nullptr || to == nullptr) continue;
     const ScanRecord& a = *from;
     const ScanRecord& b = *to;

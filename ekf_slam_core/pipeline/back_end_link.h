@@ -138,8 +138,6 @@ class BackEndLink {
   // then the transform from the new front end's frame to the saved one's.
   std::optional<Pose2> resume_at_;
   std::optional<Pose2> front_end_offset_;
-  int restored_keys_ = 0;               // key scans of a resumed state (indices below this)
-  std::vector<Pose2> saved_key_final_;  // their final poses (BackEndLinkState::key_final)
 };
 
 }  // namespace ekf_slam

@@ -1,6 +1,7 @@
 #include "ekf_slam_core/pipeline/scan_history.h"
 
 #include <algorithm>
+#include <unordered_map>
 
 namespace ekf_slam {
 
@@ -29,6 +30,57 @@ ScanHistory::ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_co
                          const KeptReadingsOptions& readings)
     : bound_(bound), readings_(readings) {
   full_recorder_.setPrior(prior, prior_covariance);
+}
+
+ScanHistoryState ScanHistory::state() const {
+  ScanHistoryState out;
+  out.records = records_;
+  out.first_record = first_record_;
+  out.first_iteration = first_iteration_;
+  out.steps = recorder_.steps();
+  out.iterations = full_recorder_.iterations();
+  const auto& merged = full_recorder_.mergedInto();
+  out.merged_into.assign(merged.begin(), merged.end());
+  std::sort(out.merged_into.begin(), out.merged_into.end());
+  const auto& estimates = full_recorder_.lastEstimates();
+  out.last_estimates.assign(estimates.begin(), estimates.end());
+  std::sort(out.last_estimates.begin(), out.last_estimates.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  out.prior_mean = full_recorder_.priorMean();
+  out.prior_covariance = full_recorder_.priorCovariance();
+  return out;
+}
+
+std::string ScanHistory::restore(const ScanHistoryState& state) {
+  if (state.steps.size() != state.iterations.size()) {
+    return "the history's two records of the iterations differ in length";
+  }
+  if (state.first_record < 0 || state.first_iteration < 0) {
+    return "the history starts at a negative scan or iteration";
+  }
+  const int iterations = static_cast<int>(state.iterations.size());
+  int last = -1;
+  for (const ScanRecord& r : state.records) {
+    // A scan hangs off an iteration at or after the history's first
+    // (-1: a scan before the first iteration), never off a later one.
+    if (r.iteration < last || r.iteration >= state.first_iteration + iterations ||
+        (r.iteration >= 0 && r.iteration < state.first_iteration && iterations > 0)) {
+      return "a scan of the history hangs off an iteration it does not hold";
+    }
+    last = r.iteration;
+  }
+  records_ = state.records;
+  first_record_ = state.first_record;
+  first_iteration_ = state.first_iteration;
+  recorder_.restore(state.steps);
+  full_recorder_.restore(
+      state.iterations,
+      std::unordered_map<int, int>(state.merged_into.begin(), state.merged_into.end()),
+      std::unordered_map<int, Vector2>(state.last_estimates.begin(), state.last_estimates.end()),
+      state.prior_mean, state.prior_covariance);
+  kept_.clear();
+  left_grid_.reset();
+  return "";
 }
 
 void ScanHistory::addIteration(double stamp, const EkfSlam& filter, const OdometryControl* control,

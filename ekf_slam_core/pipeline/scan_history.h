@@ -22,6 +22,8 @@
 
 #include <deque>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/geometry/stamped_pose.h"
@@ -65,11 +67,33 @@ struct KeptReadingsOptions {
   Pose2 laser_pose;           // base_link → laser, where the rays start
 };
 
+// What a ScanHistory holds apart from the kept readings: a saved state
+// carries it (slam_state.h), so that a resumed run's smoothers and
+// trajectories go on over the saved scans as if the run had not stopped.
+struct ScanHistoryState {
+  std::vector<ScanRecord> records;  // scans first_record on
+  long first_record = 0;
+  int first_iteration = 0;
+  std::vector<SmootherStep> steps;                      // the RTS smoother's, one per iteration
+  std::vector<SmootherIteration> iterations;            // the full smoother's, one per iteration
+  std::vector<std::pair<int, int>> merged_into;         // dropped landmark id → kept id, by id
+  std::vector<std::pair<int, Vector2>> last_estimates;  // landmark id → estimate, by id
+  Pose2 prior_mean;                                     // of the first iteration
+  Matrix3 prior_covariance = Matrix3::Zero();
+};
+
 class ScanHistory {
  public:
   // `bound`: history_scans. The full smoother's first pose is `prior`.
   ScanHistory(long bound, const Pose2& prior, const Matrix3& prior_covariance,
               const KeptReadingsOptions& readings = {});
+
+  // What it holds, and the way back: restore() replaces the records and
+  // iterations (the kept readings and their grid are cleared; the bound
+  // stays this history's own). Empty on success, else what does not fit
+  // together in `state` (the history is then unchanged).
+  ScanHistoryState state() const;
+  std::string restore(const ScanHistoryState& state);
 
   // The prediction of an iteration (for the RTS smoother) …
   void addTransition(const Matrix3& F, const Pose2& predicted, const Matrix3& predicted_cov) {

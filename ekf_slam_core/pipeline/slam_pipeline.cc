@@ -16,6 +16,11 @@ std::vector<int> observedIds(const ScanResult& result) {
   return ids;
 }
 
+ScanHistory emptyHistory(const PipelineOptions& options) {
+  return ScanHistory(options.history_scans, options.initial_pose, options.initial_pose_covariance,
+                     {options.keep_readings, options.readings_grid, options.filter.laser_pose});
+}
+
 }  // namespace
 
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
@@ -23,8 +28,7 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       front_end_(options),
       filter_(options),
       back_end_(options),
-      history_(options.history_scans, options.initial_pose, options.initial_pose_covariance,
-               {options.keep_readings, options.readings_grid, options.filter.laser_pose}) {}
+      history_(emptyHistory(options)) {}
 
 PipelineCounters SlamPipeline::counters() const {
   PipelineCounters out;
@@ -51,6 +55,7 @@ SlamState SlamPipeline::state(const std::string& configuration) const {
     out.has_front_end = true;
     out.front_end = std::move(*front_end);
   }
+  out.history = history_.state();
   out.scans = counters_.scans + resumed_scans_;
   if (initialised_) {
     // Resumed from the last iteration, where the filter's pose is.
@@ -76,6 +81,7 @@ std::string SlamPipeline::resume(const SlamState& state, ResumeAt at) {
             << "): another laser mount (its key scans would not fit)";
     return message.str();
   }
+  if (const std::string error = history_.restore(state.history); !error.empty()) return error;
   // The front end goes on in the saved frame when its map was saved, and
   // the back end then needs no offset between the two runs' frames.
   const bool same_frame = state.has_front_end && front_end_.restore(state.front_end);
@@ -83,6 +89,7 @@ std::string SlamPipeline::resume(const SlamState& state, ResumeAt at) {
           back_end_.resume(state.back_end, same_frame && at == ResumeAt::kWhereItStopped);
       !error.empty()) {
     front_end_ = FrontEnd(options_);
+    history_ = emptyHistory(options_);
     return error;
   }
   filter_.mutableFilter().restore(state.filter);

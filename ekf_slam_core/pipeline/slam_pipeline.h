@@ -98,7 +98,8 @@ class SlamPipeline {
   // kept in the state for people.
   SlamState state(const std::string& configuration = "") const;
   // Goes on from `state`, before the first scan: the filter's map and pose,
-  // the loop closer's key scans and graph. The next scan is taken where the
+  // the loop closer's key scans and graph, the history (the trajectories
+  // and smoothers then cover the saved scans too). The next scan is taken where the
   // saved run stopped (its odometry may start anywhere: only increments
   // count). Refused, with the reason, after the first scan, or when the
   // laser mount differs from options.filter.laser_pose (the key scans'

@@ -156,6 +156,14 @@ void list(Archive& a, std::vector<T>& v, size_t min_bytes, Element element) {
   for (size_t i = 0; i < n && a.ok(); ++i) element(v[i]);
 }
 
+// A matrix, row by row.
+template <class Archive, class Matrix>
+void matrix(Archive& a, Matrix& m) {
+  for (int i = 0; i < m.rows(); ++i) {
+    for (int j = 0; j < m.cols(); ++j) a.item(m(i, j));
+  }
+}
+
 template <class Archive>
 void describe(Archive& a, LoopClosureCounters& c) {
   for (long* v :
@@ -206,6 +214,11 @@ void describe(Archive& a, LoopCloserState& s) {
     a.item(k.stamp);
     a.item(k.wall_direction);
   });
+  list(a, s.scans, 8 * 5, [&](LoopCloserState::ScanEntry& e) {
+    a.item(e.stamp);
+    a.item(e.key);
+    a.item(e.offset);
+  });
   describe(a, s.graph);
   list(a, s.adjacency, 8, [&](std::vector<std::pair<int, double>>& neighbours) {
     list(a, neighbours, 16, [&](std::pair<int, double>& n) {
@@ -235,6 +248,58 @@ void describe(Archive& a, BackEndLinkState& s) {
   a.item(s.has_map_from_graph);
   a.item(s.map_from_graph);
   a.item(s.last_front_end);
+  list(a, s.record_of_loop_scan, 8, [&](long& r) { a.item(r); });
+}
+
+template <class Archive>
+void describe(Archive& a, ScanHistoryState& h) {
+  list(a, h.records, 8 * 23, [&](ScanRecord& r) {
+    a.item(r.stamp);
+    a.item(r.filtered);
+    matrix(a, r.covariance);
+    a.item(r.odometry);
+    a.item(r.iteration);
+    a.item(r.odometry_at_iteration);
+    a.item(r.causal);
+  });
+  a.item(h.first_record);
+  a.item(h.first_iteration);
+  list(a, h.steps, 8 * 34, [&](SmootherStep& step) {
+    a.item(step.stamp);
+    a.item(step.filtered);
+    matrix(a, step.filtered_cov);
+    matrix(a, step.F_next);
+    a.item(step.predicted_next);
+    matrix(a, step.predicted_next_cov);
+  });
+  list(a, h.iterations, 8 * 23 + 2, [&](SmootherIteration& it) {
+    a.item(it.stamp);
+    a.item(it.filtered);
+    a.item(it.has_control);
+    a.item(it.control.rot1);
+    a.item(it.control.trans);
+    a.item(it.control.rot2);
+    matrix(a, it.control_covariance);
+    a.item(it.motion);
+    a.item(it.has_wheels);
+    a.item(it.wheels);
+    list(a, it.sightings, 8 * 7, [&](LandmarkSighting& sighting) {
+      a.item(sighting.landmark_id);
+      a.item(sighting.observation.z.range);
+      a.item(sighting.observation.z.bearing);
+      matrix(a, sighting.observation.covariance);
+    });
+  });
+  list(a, h.merged_into, 16, [&](std::pair<int, int>& m) {
+    a.item(m.first);
+    a.item(m.second);
+  });
+  list(a, h.last_estimates, 24, [&](std::pair<int, Vector2>& e) {
+    a.item(e.first);
+    a.item(e.second);
+  });
+  a.item(h.prior_mean);
+  matrix(a, h.prior_covariance);
 }
 
 // The filter: the live mean, the covariance's lower triangle (the stored
@@ -289,9 +354,8 @@ void describe(Archive& a, FilterState& f) {
   a.item(f.mapping_enabled);
 }
 
-// `version`: of the bytes read (the one written: kSlamStateVersion).
 template <class Archive>
-void describe(Archive& a, SlamState& s, uint32_t version) {
+void describe(Archive& a, SlamState& s) {
   a.item(s.configuration);
   a.item(s.laser_pose);
   describe(a, s.filter);
@@ -320,7 +384,7 @@ void describe(Archive& a, SlamState& s, uint32_t version) {
   a.item(s.has_last_iteration);
   a.item(s.last_stamp);
   a.item(s.last_raw_odometry);
-  if (version >= 2) list(a, s.back_end.key_final, 24, [&](Pose2& p) { a.item(p); });
+  describe(a, s.history);
 }
 
 // What decoding cannot see field by field: the landmarks' layout in the
@@ -345,8 +409,12 @@ std::string inconsistency(const SlamState& s) {
   if (b.key_filtered.size() != b.closer.keys.size()) {
     return "the filter's poses at the key scans do not match the key scans";
   }
-  if (!b.key_final.empty() && b.key_final.size() != b.closer.keys.size()) {
-    return "the final poses of the key scans do not match the key scans";
+  if (b.record_of_loop_scan.size() > static_cast<size_t>(b.closer.scan_count)) {
+    return "the history records of the loop scans outnumber the loop scans";
+  }
+  const ScanHistoryState& h = s.history;
+  if (h.steps.size() != h.iterations.size()) {
+    return "the history's two records of the iterations differ in length";
   }
   return "";
 }
@@ -356,7 +424,7 @@ std::string inconsistency(const SlamState& s) {
 std::string encodeSlamState(const SlamState& state) {
   Writer writer;
   SlamState copy = state;  // describe() takes its fields by reference
-  describe(writer, copy, kSlamStateVersion);
+  describe(writer, copy);
   const std::string& payload = writer.bytes();
   std::string out(kMagic, kMagicSize);
   putUnsigned(kSlamStateVersion, 4, &out);
@@ -372,9 +440,12 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   }
   if (bytes.size() < kHeaderSize) return "the state ends inside its header";
   const uint32_t version = static_cast<uint32_t>(getUnsigned(bytes.data() + kMagicSize, 4));
-  if (version != kSlamStateVersion && version != 1) {
-    return "state format version " + std::to_string(version) + "; this build reads versions 1 to " +
-           std::to_string(kSlamStateVersion);
+  if (version != kSlamStateVersion) {
+    return "state format version " + std::to_string(version) + "; this build reads version " +
+           std::to_string(kSlamStateVersion) +
+           (version < kSlamStateVersion
+                ? " (an older state holds no history of the scans: map the log again)"
+                : "");
   }
   const uint64_t length = getUnsigned(bytes.data() + kMagicSize + 4, 8);
   if (length > bytes.size() - kHeaderSize || bytes.size() - kHeaderSize - length != kChecksumSize) {
@@ -387,31 +458,12 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   }
   Reader reader(payload, length);
   SlamState read;
-  describe(reader, read, version);
+  describe(reader, read);
   if (reader.ok() && !reader.atEnd()) reader.fail("bytes after the state's last field");
   if (!reader.ok()) return reader.error();
   if (const std::string problem = inconsistency(read); !problem.empty()) return problem;
   *state = std::move(read);
   return "";
-}
-
-void setFinalKeyPoses(const std::vector<StampedPose>& final_trajectory, SlamState* state) {
-  BackEndLinkState& b = state->back_end;
-  const LoopCloserState& closer = b.closer;
-  std::unordered_map<double, Pose2> at_stamp;
-  for (const StampedPose& p : final_trajectory) at_stamp.emplace(p.stamp, p.pose);  // the first
-  std::vector<Pose2> final_poses(closer.keys.size());
-  for (size_t k = 0; k < closer.keys.size(); ++k) {
-    if (const auto found = at_stamp.find(closer.keys[k].stamp); found != at_stamp.end()) {
-      final_poses[k] = found->second;
-    } else if (k < b.key_final.size()) {
-      final_poses[k] = b.key_final[k];
-    } else {
-      const Pose2 graph = closer.graph.pose(static_cast<int>(k));
-      final_poses[k] = b.has_map_from_graph ? compose(b.map_from_graph, graph) : graph;
-    }
-  }
-  b.key_final = std::move(final_poses);
 }
 
 std::string writeSlamState(const std::string& path, const SlamState& state) {

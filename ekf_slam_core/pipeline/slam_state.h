@@ -6,17 +6,21 @@
 // graph with its loops and heading edges, the search's bookkeeping), the
 // link between the two (the filter's pose at each key scan, the key scan
 // each landmark hangs off, the graph's frame in the map frame, where the
-// robot stopped), the laser mount and the configuration text the map was
-// made with. Its size is set by the building (landmarks, key scans: the
-// loop closer lets the readings of a place's surplus key scans go), not by
-// the hours driven: the per-scan history stays behind, and the occupancy
-// grid is built again from the key scans.
+// robot stopped), the laser mount, the configuration text the map was
+// made with, and the history of the scans and iterations (scan_history.h)
+// that the smoothers and the trajectory files read: a resumed run's full
+// smoother solves the saved scans and the new ones together, as one run's
+// would, and its trajectories cover both. The history is bounded as the
+// pipeline bounds it (PipelineOptions::history_scans: the live node keeps
+// the newest 10,000 scans, the offline runner every scan of its log); the
+// rest is bounded by the building (landmarks, key scans: the loop closer
+// lets the readings of a place's surplus key scans go). The occupancy grid
+// is built again from the key scans.
 //
 // The front end's scan-matching map goes with them (its global mode; a
 // local map refills within a few scans), so that new scans match against
-// the old ones from the first. What starts afresh on a resume: the history
-// (trajectories and the full smoother cover the new scans; loops to saved
-// key scans hold the smoother in the saved map), the counters of the scans.
+// the old ones from the first. What starts afresh on a resume: the
+// counters of the scans and the readings a live node keeps for its grid.
 //
 // The file (writeSlamState / readSlamState): the magic line
 // "EKF-SLAM state\n", the format version (uint32), the payload's length
@@ -37,13 +41,14 @@
 #include "ekf_slam_core/filter/line_support.h"
 #include "ekf_slam_core/geometry/stamped_pose.h"
 #include "ekf_slam_core/loop_closure/loop_closer.h"
+#include "ekf_slam_core/pipeline/scan_history.h"
 #include "ekf_slam_core/scan_matching/scan_matcher.h"
 
 namespace ekf_slam {
 
-// The version this build writes. It reads it and version 1 (no final
-// key-scan poses: BackEndLinkState::key_final empty).
-constexpr uint32_t kSlamStateVersion = 2;
+// The version this build writes and reads. Versions 1 and 2 held no
+// history of the scans and are refused by name.
+constexpr uint32_t kSlamStateVersion = 3;
 
 // The loop-closing back end's link to the filter (BackEndLink).
 struct BackEndLinkState {
@@ -53,14 +58,10 @@ struct BackEndLinkState {
   bool has_map_from_graph = false;
   Pose2 map_from_graph;  // the graph's frame in the map frame
   Pose2 last_front_end;  // the front end's pose at the last scan (the closer's frame)
-  // Per key scan, where the run's final trajectory put it (map frame): the
-  // full smoother's pose of its scan (ekf_slam_offline --save-state), for
-  // key scans of earlier runs what their state said. Empty when no final
-  // trajectory was solved (the live node's ~write_state). A later run's
-  // full smoother holds its loops to these key scans there, so that its
-  // trajectory fits the saved run's final one rather than the loop-closed
-  // graph's (a log mapped in two halves, docs/results.md).
-  std::vector<Pose2> key_final;
+  // The history record of each of the closer's newest scans (its last
+  // record_of_loop_scan.size() scans), so that a loop to a saved key scan
+  // joins that scan's iteration in a resumed run's full smoother.
+  std::vector<long> record_of_loop_scan;
 };
 
 struct SlamState {
@@ -73,6 +74,7 @@ struct SlamState {
   // resumed front end starts a map of its own in a frame of its own.
   bool has_front_end = false;
   ScanMatchingOdometryState front_end;
+  ScanHistoryState history;
   long scans = 0;  // scans processed before the save (all runs together)
   // The last iteration: its stamp and the robot's raw odometry there. A
   // resumed run whose first scan follows within kResumeGap with odometry
@@ -92,12 +94,6 @@ enum class ResumeAt {
   kWhereItStopped,  // where the saved run stopped (see SlamState::last_stamp)
   kPlacedRobot,     // where placeRobot put it (global_localization.h)
 };
-
-// Fills state->back_end.key_final from a run's final trajectory (one pose
-// per scan, map frame): each key scan takes its scan's pose, found by
-// stamp; a key scan the trajectory does not hold keeps its entry, or
-// (none) takes its graph pose in the map frame.
-void setFinalKeyPoses(const std::vector<StampedPose>& final_trajectory, SlamState* state);
 
 // The file's bytes, and back. decodeSlamState leaves `state` unchanged and
 // returns the problem when the bytes are not a whole, consistent state of

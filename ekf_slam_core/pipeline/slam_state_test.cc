@@ -146,8 +146,10 @@ TEST_F(SlamStateFile, AResumedRunClosesLoopsWithTheSavedKeyScans) {
     EXPECT_GT(resumed.backEndCounters().key_scans, state.back_end.closer.counters.key_scans);
     // The resumed run's poses are in the saved map (the first scan's pose
     // is its origin) and as close to the truth as one run's.
-    const std::vector<StampedPose> resumed_causal = resumed.causalScanPoses();
-    ASSERT_EQ(resumed_causal.size(), drive.scans.size() - from);
+    // The history goes on from the saved scans' records.
+    const std::vector<StampedPose> with_saved = resumed.causalScanPoses();
+    ASSERT_EQ(with_saved.size(), half + drive.scans.size() - from);
+    const std::vector<StampedPose> resumed_causal(with_saved.begin() + half, with_saved.end());
     double resumed_sum = 0.0, whole_sum = 0.0, resumed_worst = 0.0;
     for (size_t k = 0; k < resumed_causal.size(); ++k) {
       const Pose2 truth = between(drive.truth[0], drive.truth[from + k]);
@@ -213,8 +215,11 @@ TEST_F(SlamStateFile, ARobotStartedAnywhereIsFoundInTheSavedMapAndMapsOnFromTher
     scan.stamp += 86400.0;
     resumed.processScan(scan, odometry(i));
   }
-  const std::vector<StampedPose> causal = resumed.causalScanPoses();
-  ASSERT_EQ(causal.size(), drive.scans.size() - found);
+  // The new scans, after the saved ones' records.
+  const std::vector<StampedPose> with_saved = resumed.causalScanPoses();
+  const size_t saved = state.history.records.size();
+  ASSERT_EQ(with_saved.size(), saved + drive.scans.size() - found);
+  const std::vector<StampedPose> causal(with_saved.begin() + saved, with_saved.end());
   double sum = 0.0, worst = 0.0;
   for (size_t k = 0; k < causal.size(); ++k) {
     const Pose2 t = between(drive.truth[0], drive.truth[found + k]);
@@ -325,59 +330,42 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
   EXPECT_LT(worst, 0.1);
 }
 
-// FNV-1a 64, the file's checksum, to build a version-1 file here.
-uint64_t fnv1a(const std::string& data) {
-  uint64_t hash = 14695981039346656037ULL;
-  for (const char c : data) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 1099511628211ULL;
-  }
-  return hash;
-}
-
-// The final key-scan poses: each key scan takes the pose the final
-// trajectory gives its scan, the others keep their graph pose in the map
-// frame; they are saved and read back, and a version-1 file (without
-// them) is read as a state without them.
-TEST_F(SlamStateFile, KeyScansTakeTheFinalTrajectorysPosesAndVersionOneStillReads) {
+// The history goes with the state: a run resumed at the log's next scan
+// holds the saved scans' records, and its full smoother solves them with
+// the new ones into the trajectory one uninterrupted run gives.
+TEST_F(SlamStateFile, AResumedRunSmoothsTheSavedScansWithTheNewOnes) {
   const Drive drive = islandDrive();
-  SlamState state = firstHalf(drive).state();
-  const auto& keys = state.back_end.closer.keys;
-  ASSERT_GT(keys.size(), 3u);
-  EXPECT_TRUE(state.back_end.key_final.empty()) << "no final trajectory solved yet";
-  std::vector<StampedPose> final_trajectory;
-  for (size_t k = 1; k < keys.size(); ++k) {
-    final_trajectory.push_back({keys[k].stamp, Pose2(1.0 * k, -2.0, 0.1)});
+  const size_t half = drive.scans.size() / 2;
+  SlamState state;
+  ASSERT_EQ(decodeSlamState(encodeSlamState(firstHalf(drive).state()), &state), "");
+  EXPECT_EQ(state.history.records.size(), half);
+  SlamPipeline resumed(islandOptions());
+  ASSERT_EQ(resumed.resume(state), "");
+  SlamPipeline whole(islandOptions());
+  for (size_t i = 0; i < drive.scans.size(); ++i) {
+    whole.processScan(drive.scans[i], drive.odometry[i]);
+    if (i >= half) resumed.processScan(drive.scans[i], drive.odometry[i]);
   }
-  setFinalKeyPoses(final_trajectory, &state);
-  ASSERT_EQ(state.back_end.key_final.size(), keys.size());
-  EXPECT_EQ(state.back_end.key_final[2].x, 2.0);
-  // The first key scan is not in the trajectory: its graph pose, in the map frame.
-  const Pose2 graph_in_map =
-      compose(state.back_end.map_from_graph, state.back_end.closer.graph.pose(0));
-  EXPECT_EQ(state.back_end.key_final[0].x, graph_in_map.x);
-  SlamState read;
-  ASSERT_EQ(decodeSlamState(encodeSlamState(state), &read), "");
-  EXPECT_EQ(read.back_end.key_final.size(), keys.size());
-  EXPECT_EQ(read.back_end.key_final[2].x, 2.0);
-
-  // Version 1: the same payload without the list at its end (an empty
-  // one: its count, 8 bytes), version 1 in the header, its checksum.
-  state.back_end.key_final.clear();
-  const std::string v2 = encodeSlamState(state);
-  const size_t header = 15 + 4 + 8;
-  const std::string payload = v2.substr(header, v2.size() - header - 8 - 8);
-  std::string v1 = v2.substr(0, 15);
-  for (const uint64_t value : {uint64_t{1}, uint64_t{payload.size()}}) {
-    for (int i = 0; i < (value == 1 ? 4 : 8); ++i)
-      v1.push_back(static_cast<char>(value >> (8 * i)));
+  whole.finishLoopClosure();
+  resumed.finishLoopClosure();
+  ASSERT_GT(resumed.backEndCounters().accepted, 0) << "no loop with the saved key scans";
+  const std::vector<StampedPose> one = whole.smoothedScanPoses();
+  const std::vector<StampedPose> two = resumed.smoothedScanPoses();
+  ASSERT_EQ(two.size(), drive.scans.size()) << "the saved scans are smoothed too";
+  ASSERT_EQ(one.size(), two.size());
+  double largest = 0.0, one_error = 0.0, two_error = 0.0;
+  for (size_t k = 0; k < one.size(); ++k) {
+    EXPECT_EQ(two[k].stamp, drive.scans[k].stamp);
+    largest =
+        std::max(largest, std::hypot(one[k].pose.x - two[k].pose.x, one[k].pose.y - two[k].pose.y));
+    const Pose2 truth = between(drive.truth[0], drive.truth[k]);
+    one_error += std::hypot(one[k].pose.x - truth.x, one[k].pose.y - truth.y) / one.size();
+    two_error += std::hypot(two[k].pose.x - truth.x, two[k].pose.y - truth.y) / two.size();
   }
-  v1 += payload;
-  const uint64_t sum = fnv1a(payload);
-  for (int i = 0; i < 8; ++i) v1.push_back(static_cast<char>(sum >> (8 * i)));
-  ASSERT_EQ(decodeSlamState(v1, &read), "");
-  EXPECT_TRUE(read.back_end.key_final.empty());
-  EXPECT_EQ(encodeSlamState(read), v2);
+  std::cout << "final trajectories: one run " << one_error << " m, two halves " << two_error
+            << " m mean error; largest difference " << largest << " m\n";
+  EXPECT_LT(largest, 0.01);
+  EXPECT_LT(two_error, one_error * 1.05 + 0.001);
 }
 
 TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
@@ -397,8 +385,10 @@ TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
   corrupt[bytes.size() / 2] ^= 0x40;
   EXPECT_NE(refused(corrupt).find("checksum"), std::string::npos);
   std::string other_version = bytes;
-  other_version[15] = 3;  // the version's low byte, after the magic line
-  EXPECT_NE(refused(other_version).find("version 3"), std::string::npos) << refused(other_version);
+  other_version[15] = 9;  // the version's low byte, after the magic line
+  EXPECT_NE(refused(other_version).find("version 9"), std::string::npos) << refused(other_version);
+  other_version[15] = 2;  // an older build's: no history of the scans
+  EXPECT_NE(refused(other_version).find("no history"), std::string::npos) << refused(other_version);
   EXPECT_NE(refused("P5\n640 480\n").find("not a SLAM state"), std::string::npos);
   EXPECT_EQ(decodeSlamState(bytes, &read), "");
 

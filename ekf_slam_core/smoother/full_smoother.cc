@@ -55,6 +55,16 @@ void FullSmootherRecorder::setPrior(const Pose2& mean, const Matrix3& covariance
   prior_covariance_ = covariance;
 }
 
+void FullSmootherRecorder::restore(std::vector<SmootherIteration> iterations,
+                                   std::unordered_map<int, int> merged_into,
+                                   std::unordered_map<int, Vector2> last_estimates,
+                                   const Pose2& prior_mean, const Matrix3& prior_covariance) {
+  iterations_ = std::move(iterations);
+  merged_into_ = std::move(merged_into);
+  last_estimate_ = std::move(last_estimates);
+  setPrior(prior_mean, prior_covariance);
+}
+
 void FullSmootherRecorder::addIteration(double stamp, const EkfSlam& filter,
                                         const OdometryControl* control,
                                         const std::vector<PointObservation>& observations,
@@ -459,16 +469,6 @@ FullSmootherResult smoothFull(const FullSmootherRecorder& record, const EkfSlam&
     }
     result.constraint_edges = 0;
     for (const IterationConstraint& c : constraints) {
-      if (c.from_iteration == IterationConstraint::kMapFrame && c.to_iteration >= 0 &&
-          c.to_iteration < n) {
-        PosePriorEdge prior;
-        prior.pose = c.to_iteration;
-        prior.mean = compose(c.measurement, inverse(c.to_offset));
-        prior.information = c.information;
-        graph.addEdge(prior);
-        ++result.constraint_edges;
-        continue;
-      }
       if (c.from_iteration < 0 || c.from_iteration >= n || c.to_iteration < 0 ||
           c.to_iteration >= n) {
         continue;

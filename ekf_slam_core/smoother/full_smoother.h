@@ -204,10 +204,7 @@ struct SmootherIteration {
 
 // A relative-pose constraint between two iterations' poses, each carried by
 // a constant offset (a key scan = its iteration's pose ⊕ the odometry since).
-// from_iteration kMapFrame: a prior, `measurement` being the pose of
-// (to ⊕ to_offset) in the map frame (a loop to a key scan of a saved map).
 struct IterationConstraint {
-  static constexpr int kMapFrame = -1;
   int from_iteration = 0;
   int to_iteration = 0;
   Pose2 from_offset;
@@ -237,8 +234,17 @@ class FullSmootherRecorder {
   void dropFront(size_t count);
 
   const std::vector<SmootherIteration>& iterations() const { return iterations_; }
+  // Goes on from a record saved earlier (a resumed run, slam_state.h):
+  // its iterations, merges (dropped id → kept id), the landmark estimates
+  // and the first iteration's prior.
+  void restore(std::vector<SmootherIteration> iterations, std::unordered_map<int, int> merged_into,
+               std::unordered_map<int, Vector2> last_estimates, const Pose2& prior_mean,
+               const Matrix3& prior_covariance);
+
   // The landmark a sighting of `id` belongs to after all merges so far.
   int survivorOf(int id) const;
+  // The merges so far: dropped id → the id it went into.
+  const std::unordered_map<int, int>& mergedInto() const { return merged_into_; }
   // The filter's estimate of `id` when it was last matched or created.
   const std::unordered_map<int, Vector2>& lastEstimates() const { return last_estimate_; }
   const Pose2& priorMean() const { return prior_mean_; }

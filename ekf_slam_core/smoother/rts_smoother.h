@@ -16,6 +16,7 @@
 // exact for a linear-Gaussian chain (tested).
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "ekf_slam_core/geometry/pose2.h"
@@ -47,6 +48,8 @@ class TrajectoryRecorder {
   // Replaces the last filtered estimate (the update after the prediction).
   const std::vector<SmootherStep>& steps() const { return steps_; }
   void clear() { steps_.clear(); }
+  // Goes on from steps recorded earlier (a resumed run).
+  void restore(std::vector<SmootherStep> steps) { steps_ = std::move(steps); }
   // Forgets the oldest `count` steps (a bounded history): the chain then
   // starts at the step that was number `count`.
   void dropFront(size_t count);

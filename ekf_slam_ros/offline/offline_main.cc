@@ -433,8 +433,8 @@ void traceScan(double stamp, const ekf_slam::ScanResult& result, std::ofstream* 
 // Every scan through the pipeline in file order, then the back end's final
 // optimisation. With --save-state, `to_save` receives the state after the
 // last scan, before that optimisation (a later run goes on from the run as
-// it stood); it is written once the final trajectory has placed its key
-// scans (setFinalKeyPoses).
+// it stood: its resumed full smoother solves the saved scans again with
+// the new ones).
 // --global: the log's first scans searched for in the saved map, one more
 // joined at a time, until the robot is found (at most kGlobalScans); the
 // state's robot is moved there and the scans before it are left out.
@@ -849,10 +849,7 @@ int main(int argc, char** argv) {
   Trajectories trajectories;
   smooth(args, log, pipeline, &trajectories);
   std::string error;
-  if (to_save) {
-    ekf_slam::setFinalKeyPoses(trajectories.smoothed, &*to_save);
-    error = ekf_slam::writeSlamState(args.save_state, *to_save);
-  }
+  if (to_save) error = ekf_slam::writeSlamState(args.save_state, *to_save);
   if (error.empty()) error = writeResults(args.out_dir, config, log, pipeline, trajectories);
   if (args.maps && error.empty()) error = writeMaps(args.out_dir, config, log, trajectories);
   if (error.empty() && !args.export_dir.empty()) {

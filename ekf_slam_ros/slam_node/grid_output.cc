@@ -53,6 +53,9 @@ void GridOutput::submitNewScans(const SlamPipeline& pipeline, const Pose2& laser
                                 const std_msgs::Header& header) {
   const std::deque<KeptScan>& kept = pipeline.history().keptScans();
   if (kept.empty() || kept.back().scan < scans_mapped_) return;
+  // A new pipeline's first kept scan (after a resume, the first new one:
+  // the saved scans' readings were not kept).
+  if (scans_mapped_ < 0) scans_mapped_ = kept.front().scan;
   if (kept.front().scan > scans_mapped_) {
     ROS_WARN_THROTTLE(60.0,
                       "ekf_slam_node: %ld scans left the history (history_max_scans %d) before the "
@@ -94,7 +97,7 @@ void GridOutput::publish(const nav_msgs::OccupancyGrid& map) {
 void GridOutput::restart() {
   optimisations_mapped_ = -1;
   keys_mapped_ = 0;
-  scans_mapped_ = 0;
+  scans_mapped_ = -1;
   if (live_map_) live_map_->newMap();
 }
 

@@ -67,7 +67,8 @@ class GridOutput {
   ros::Timer map_timer_;
   long optimisations_mapped_ = -1;  // back-end optimisations seen by the last grid submitted
   int keys_mapped_ = 0;             // key scans in that grid
-  long scans_mapped_ = 0;           // without loop closure: the scans before this one are cast
+  long scans_mapped_ =
+      -1;  // without loop closure: the scans before this one are cast (-1: none yet)
   // The grid the node published itself and when; the live map keeps its own.
   std::optional<nav_msgs::OccupancyGrid> node_grid_;
   std::chrono::steady_clock::time_point node_grid_time_;

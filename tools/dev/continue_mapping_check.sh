@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Continue mapping on the shared logs: each log is mapped in one run, and
 # again in two halves, the second resumed from the state the first saved
-# (ekf_slam_offline --save-state / --resume). The halves' trajectories put
-# end to end are scored like the one run's (causal: what the live node
+# (ekf_slam_offline --save-state / --resume). The resumed run's
+# trajectories cover the whole log (the state carries the first half's
+# history) and are scored like the one run's (causal: what the live node
 # publishes; final: the full smoother), against the log's ground-truth
 # relations. The second half is also localised in the first half's state
 # with mapping off (--localize-only; the robot starts where the first half
@@ -66,22 +67,24 @@ for name in ${DATASETS:-intel aces}; do
   loops_second=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/second/report.txt" | head -n 1)
   row="| $name | $half |"
   for kind in live smoothed; do
-    cat "$dir/first/trajectory_$kind.txt" "$dir/second/trajectory_$kind.txt" > "$dir/halves_$kind.txt"
     one=$(mean "$relations" "$dir/whole/trajectory_$kind.txt")
-    two=$(mean "$relations" "$dir/halves_$kind.txt")
+    two=$(mean "$relations" "$dir/second/trajectory_$kind.txt")
     row="$row $one | $two |"
     if ! /usr/bin/python3 -c "import sys; sys.exit(0 if $two <= 1.05 * $one else 1)"; then
       echo "continue_mapping_check: $name $kind: two halves $two m against one run $one m (over 5 %)" >&2
       failed=1
     fi
   done
-  # The one run's second half: its scans from the localised run's first stamp on.
-  start=$(awk '!/^#/ {print $1; exit}' "$dir/localised/trajectory_live.txt")
-  awk -v t="$start" '/^#/ || $1 >= t' "$dir/whole/trajectory_live.txt" > "$dir/whole_second_half_live.txt"
-  one_half=$(mean "$relations" "$dir/whole_second_half_live.txt")
-  localised=$(mean "$relations" "$dir/localised/trajectory_live.txt")
+  # The second half of each run: its scans after the first half's last.
+  end=$(awk '!/^#/ {t = $1} END {print t}' "$dir/first/trajectory_live.txt")
+  second_half() {  # trajectory -> the same, from the second half's first scan on
+    awk -v t="$end" '/^#/ || $1 > t' "$1" > "$1.second_half"
+    echo "$1.second_half"
+  }
+  one_half=$(mean "$relations" "$(second_half "$dir/whole/trajectory_live.txt")")
+  localised=$(mean "$relations" "$(second_half "$dir/localised/trajectory_live.txt")")
   if [ -f "$dir/global/report.txt" ]; then
-    global=$(mean "$relations" "$dir/global/trajectory_live.txt")
+    global=$(mean "$relations" "$(second_half "$dir/global/trajectory_live.txt")")
     found=$(sed -n 's/^global localisation: found at the log.s scan \([0-9]*\) .*/\1/p' "$dir/global/report.txt")
   else
     global="not found"
