@@ -228,7 +228,7 @@ void LoopCloser::addHeadingLoop(int key) {
   // The chain's heading window for this graph distance, widened by the two
   // wall directions' noise (3 sigma each way).
   const double window =
-      std::hypot(searchAngle(distance[nearest]),
+      std::hypot(loopSearchAngle(options_, distance[nearest]),
                  options_.search_sigmas * std::sqrt(2.0) * options_.heading_sigma);
   if (window >= kPi / 4.0) return;  // which quarter turn would be a guess
   const double estimate = wrapAngle(here.theta - graph_.pose(nearest).theta);
@@ -257,10 +257,11 @@ void LoopCloser::searchLoops(int index) {
   const std::vector<int> candidates = pickCandidates(index, distances);
   for (const int candidate : candidates) {
     ++counters_.candidates;
-    const double radius = searchRadius(distances[candidate]);
+    const double radius = loopSearchRadius(options_, distances[candidate]);
     const Pose2 guess = between(graph_.pose(candidate), graph_.pose(index));
     Pose2 relative;
-    if (!verify(candidate, index, guess, radius, searchAngle(distances[candidate]), &relative)) {
+    if (!verify(candidate, index, guess, radius, loopSearchAngle(options_, distances[candidate]),
+                &relative)) {
       ++counters_.refused;
       continue;
     }
@@ -399,18 +400,18 @@ std::vector<double> LoopCloser::graphDistances(int from) const {
 // variance grows as σ_r² d, and a heading error that grew linearly along the
 // way displaces the far end by its integral, variance σ_r² d³ / 3, on top of
 // the translation random walk σ_t² d.
-double LoopCloser::searchRadius(double graph_distance) const {
+double loopSearchRadius(const LoopClosureOptions& options, double graph_distance) {
   const double d = graph_distance;
-  const double var_r = std::pow(options_.rotation_sigma_per_sqrt_metre, 2);
-  const double var_t = std::pow(options_.translation_sigma_per_sqrt_metre, 2);
+  const double var_r = std::pow(options.rotation_sigma_per_sqrt_metre, 2);
+  const double var_t = std::pow(options.translation_sigma_per_sqrt_metre, 2);
   const double sigma = std::sqrt(var_t * d + var_r * d * d * d / 3.0);
-  return std::clamp(options_.search_sigmas * sigma, options_.search_radius_min,
-                    options_.search_radius_max);
+  return std::clamp(options.search_sigmas * sigma, options.search_radius_min,
+                    options.search_radius_max);
 }
 
-double LoopCloser::searchAngle(double graph_distance) const {
-  const double sigma = options_.rotation_sigma_per_sqrt_metre * std::sqrt(graph_distance);
-  return std::clamp(options_.search_sigmas * sigma, options_.search_angle_min, kPi);
+double loopSearchAngle(const LoopClosureOptions& options, double graph_distance) {
+  const double sigma = options.rotation_sigma_per_sqrt_metre * std::sqrt(graph_distance);
+  return std::clamp(options.search_sigmas * sigma, options.search_angle_min, kPi);
 }
 
 std::vector<int> LoopCloser::pickCandidates(int key, const std::vector<double>& distance) const {
@@ -422,7 +423,8 @@ std::vector<int> LoopCloser::pickCandidates(int key, const std::vector<double>& 
     if (distance[j] < options_.min_loop_travel || !hasReadings(j)) continue;
     const Pose2& there = graph_.pose(j);
     if (std::abs(wrapAngle(there.theta - here.theta)) > options_.max_heading_difference) continue;
-    const double ratio = std::hypot(there.x - here.x, there.y - here.y) / searchRadius(distance[j]);
+    const double ratio =
+        std::hypot(there.x - here.x, there.y - here.y) / loopSearchRadius(options_, distance[j]);
     if (ratio <= 1.0) ranked.emplace_back(ratio, j);
   }
   std::sort(ranked.begin(), ranked.end());
@@ -446,6 +448,51 @@ std::vector<Vector2> LoopCloser::queryPoints(int key, bool sparse) const {
     for (const Vector2& p : *keys_[m].points) merged.push_back(transformFrom(placement, p));
   }
   return gridThinned(merged, sparse ? options_.search_point_spacing : icp_.min_point_spacing);
+}
+
+LoopVerdict verifyLoop(const std::vector<Vector2>& query, const std::vector<Vector2>& sparse_query,
+                       const std::vector<Vector2>& submap, const Pose2& guess, double radius,
+                       double angle, const LoopClosureOptions& options,
+                       const ScanMatcherOptions& icp, LikelihoodGrid* grid, Pose2* relative) {
+  grid->build(submap, options.correlative);
+  const CorrelativeResult coarse = correlativeSearch(sparse_query, *grid, guess, radius, angle,
+                                                     options.correlative, options.min_score);
+  if (coarse.score < options.min_score) return LoopVerdict::kRefusedByScore;
+
+  const PointCloudReference reference(submap, icp.normal_radius,
+                                      icp.initial_correspondence_distance);
+  const MatchResult fine = matchPoints(query, reference, coarse.pose, icp);
+  if (!fine.ok || fine.inlier_fraction < options.min_inlier_fraction ||
+      fine.rms_residual > options.max_rms_residual) {
+    return LoopVerdict::kRefusedByFit;
+  }
+  const Pose2 shift = between(coarse.pose, fine.pose);
+  if (std::hypot(shift.x, shift.y) > options.max_icp_shift) return LoopVerdict::kRefusedByFit;
+  // Along a featureless corridor the match slides: refuse it.
+  const Matrix3 covariance = icpCovariance(query, reference, fine.pose, icp);
+  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
+  if (std::sqrt(eigen.eigenvalues()(1)) > options.max_degenerate_sigma) {
+    return LoopVerdict::kDegenerate;
+  }
+  // Where the query itself has structure along the weakest direction (a
+  // wall across a corridor), the match must explain it there too, not only
+  // on average: a view down one corridor matched onto a view along another
+  // shares only the walls parallel to both, and a door frame or two would
+  // pass the test above.
+  if (explainedStructure(query, reference, fine.pose, eigen.eigenvectors().col(1), icp) <
+      options.min_directional_inlier_fraction) {
+    return LoopVerdict::kDegenerate;
+  }
+  // Last, as the dearest: no other place of the window may match nearly as
+  // well (the search above returns only the best pose).
+  if (options.max_runner_up_ratio < 1.0) {
+    const CorrelativeResult rival = correlativeRunnerUp(
+        sparse_query, *grid, guess, radius, angle, options.correlative, coarse.pose,
+        options.distinct_radius, options.max_runner_up_ratio * coarse.score);
+    if (rival.score > 0.0) return LoopVerdict::kAmbiguous;
+  }
+  *relative = fine.pose;
+  return LoopVerdict::kAccepted;
 }
 
 bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radius, double angle,
@@ -473,68 +520,32 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
     ++counters_.refused_by_score;  // nothing to score
     return false;
   }
-  const std::vector<Vector2> sparse_query = queryPoints(key, true);
-
   // One grid's storage serves every verification; an outsized one (a
   // submap stretched by a corrupt pose) is handed back when it is done.
-  LikelihoodGrid& grid = verify_grid_;
   struct Bound {
     LikelihoodGrid& grid;
     ~Bound() {
       if (grid.storageBytes() > kKeptGridBytes) grid.release();
     }
-  } bound{grid};
-  grid.build(submap, options_.correlative);
-  const CorrelativeResult coarse = correlativeSearch(sparse_query, grid, guess, radius, angle,
-                                                     options_.correlative, options_.min_score);
-  if (coarse.score < options_.min_score) {
-    ++counters_.refused_by_score;
-    return false;
-  }
-
-  const PointCloudReference reference(submap, icp_.normal_radius,
-                                      icp_.initial_correspondence_distance);
-  const MatchResult fine = matchPoints(query, reference, coarse.pose, icp_);
-  if (!fine.ok || fine.inlier_fraction < options_.min_inlier_fraction ||
-      fine.rms_residual > options_.max_rms_residual) {
-    ++counters_.refused_by_fit;
-    return false;
-  }
-  const Pose2 shift = between(coarse.pose, fine.pose);
-  if (std::hypot(shift.x, shift.y) > options_.max_icp_shift) {
-    ++counters_.refused_by_fit;
-    return false;
-  }
-  // Along a featureless corridor the match slides: refuse it.
-  const Matrix3 covariance = icpCovariance(query, reference, fine.pose, icp_);
-  const Eigen::SelfAdjointEigenSolver<Matrix2> eigen(covariance.topLeftCorner<2, 2>());
-  if (std::sqrt(eigen.eigenvalues()(1)) > options_.max_degenerate_sigma) {
-    ++counters_.refused_as_degenerate;
-    return false;
-  }
-  // Where the query itself has structure along the weakest direction (a
-  // wall across a corridor), the match must explain it there too, not only
-  // on average: a view down one corridor matched onto a view along another
-  // shares only the walls parallel to both, and a door frame or two would
-  // pass the test above.
-  if (explainedStructure(query, reference, fine.pose, eigen.eigenvectors().col(1), icp_) <
-      options_.min_directional_inlier_fraction) {
-    ++counters_.refused_as_degenerate;
-    return false;
-  }
-  // Last, as the dearest: no other place of the window may match nearly as
-  // well (the search above returns only the best pose).
-  if (options_.max_runner_up_ratio < 1.0) {
-    const CorrelativeResult rival = correlativeRunnerUp(
-        sparse_query, grid, guess, radius, angle, options_.correlative, coarse.pose,
-        options_.distinct_radius, options_.max_runner_up_ratio * coarse.score);
-    if (rival.score > 0.0) {
+  } bound{verify_grid_};
+  switch (verifyLoop(query, queryPoints(key, true), submap, guess, radius, angle, options_, icp_,
+                     &verify_grid_, relative)) {
+    case LoopVerdict::kAccepted:
+      return true;
+    case LoopVerdict::kRefusedByScore:
+      ++counters_.refused_by_score;
+      return false;
+    case LoopVerdict::kRefusedByFit:
+      ++counters_.refused_by_fit;
+      return false;
+    case LoopVerdict::kDegenerate:
+      ++counters_.refused_as_degenerate;
+      return false;
+    case LoopVerdict::kAmbiguous:
       ++counters_.ambiguous;
       return false;
-    }
   }
-  *relative = fine.pose;
-  return true;
+  return false;
 }
 
 PoseGraphSummary LoopCloser::optimise() {

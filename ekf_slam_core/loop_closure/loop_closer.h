@@ -254,6 +254,30 @@ double explainedStructure(const std::vector<Vector2>& query, const PointCloudRef
                           const Pose2& pose, const Vector2& direction,
                           const ScanMatcherOptions& options);
 
+// The search window's half-widths for a relative pose over
+// `graph_distance` metres of chain (the drift model above): m, and rad.
+double loopSearchRadius(const LoopClosureOptions& options, double graph_distance);
+double loopSearchAngle(const LoopClosureOptions& options, double graph_distance);
+
+// What a loop verification decided (verifyLoop).
+enum class LoopVerdict { kAccepted, kRefusedByScore, kRefusedByFit, kDegenerate, kAmbiguous };
+
+// The loop closer's verification of one match, for LoopCloser and for any
+// other place that must ask the same of a loop (ekf_slam_merge_states):
+// `query` (points in its own frame; `sparse_query` the same thinned for the
+// search) against `submap` (points in the candidate's frame) within
+// ±radius and ±angle of `guess`: the correlative search must score
+// options.min_score, ICP from its pose pair min_inlier_fraction within
+// max_rms_residual and move it at most max_icp_shift, the match must not
+// slide (max_degenerate_sigma, min_directional_inlier_fraction), and no
+// other place of the window may score within max_runner_up_ratio of it.
+// `grid` holds the search's grid (its storage reused between calls). On
+// kAccepted, `relative` is the query's frame in the submap's.
+LoopVerdict verifyLoop(const std::vector<Vector2>& query, const std::vector<Vector2>& sparse_query,
+                       const std::vector<Vector2>& submap, const Pose2& guess, double radius,
+                       double angle, const LoopClosureOptions& options,
+                       const ScanMatcherOptions& icp, LikelihoodGrid* grid, Pose2* relative);
+
 // The direction the walls of `points` (one scan, its own frame) run in,
 // modulo 90°, in [−45°, 45°): the mean of the wall normals' angles times
 // four (normals fitted as the scan matcher fits them, `options`), divided
@@ -411,9 +435,6 @@ class LoopCloser {
   bool hasReadings(int key) const { return !keys_[key].points->empty(); }
   // A pending hypothesis: true when key scan `key` confirmed it (both loops entered).
   bool tryConfirm(int key);
-  // Window half-widths for a relative pose over `graph_distance` of chain.
-  double searchRadius(double graph_distance) const;  // m
-  double searchAngle(double graph_distance) const;   // rad
   // Merged points of the recent key scans in the frame of key scan `key`.
   std::vector<Vector2> queryPoints(int key, bool sparse) const;
   PoseGraphSummary optimise();
