@@ -12,6 +12,7 @@
 #include "ekf_slam_core/io/test_folder.h"
 #include "ekf_slam_core/pipeline/global_localization.h"
 #include "ekf_slam_core/pipeline/slam_pipeline.h"
+#include "ekf_slam_core/pipeline/state_merge.h"
 #include "ekf_slam_core/sim/drive.h"
 #include "ekf_slam_core/sim/polygon_world.h"
 #include "ekf_slam_core/testing/carton_room.h"
@@ -366,6 +367,60 @@ TEST_F(SlamStateFile, AResumedRunSmoothsTheSavedScansWithTheNewOnes) {
             << " m mean error; largest difference " << largest << " m\n";
   EXPECT_LT(largest, 0.01);
   EXPECT_LT(two_error, one_error * 1.05 + 0.001);
+}
+
+// Merging: the second half of the drive mapped on its own, another day
+// (its odometry from another origin, its own map frame), and joined with
+// the first half's state: found in the first map, loops closed between the
+// two, one pose per scan of both, as close to the truth as one run.
+TEST_F(SlamStateFile, TwoRunsOfOneBuildingMergeIntoOneMap) {
+  const Drive drive = islandDrive();
+  const size_t half = drive.scans.size() / 2;
+  const SlamState first = firstHalf(drive).state();
+  SlamPipeline other_day(islandOptions());
+  const Pose2 origin(5.0, -3.0, 1.0);
+  for (size_t i = half; i < drive.scans.size(); ++i) {
+    Scan scan = drive.scans[i];
+    scan.stamp += 86400.0;
+    other_day.processScan(scan, compose(origin, between(drive.odometry[half], drive.odometry[i])));
+  }
+  SlamState second;
+  ASSERT_EQ(decodeSlamState(encodeSlamState(other_day.state()), &second), "");
+  SlamPipeline whole(islandOptions());
+  for (size_t i = 0; i < drive.scans.size(); ++i) {
+    whole.processScan(drive.scans[i], drive.odometry[i]);
+  }
+  whole.finishLoopClosure();
+  const std::vector<StampedPose> one = whole.smoothedScanPoses();
+
+  const StateMerge merge = mergeStates(first, second, islandOptions());
+  ASSERT_EQ(merge.error, "");
+  ASSERT_TRUE(merge.problem.has_value());
+  EXPECT_GE(merge.aligned_key, 0);
+  EXPECT_GT(merge.cross_loops, 0) << "no loop between the two runs";
+  const std::vector<StampedPose> merged = merge.problem->solve();
+  ASSERT_EQ(merged.size(), drive.scans.size()) << "one pose per scan of both runs";
+  double merged_sum = 0.0, one_sum = 0.0, worst = 0.0;
+  for (size_t k = 0; k < merged.size(); ++k) {
+    EXPECT_EQ(merged[k].stamp, drive.scans[k].stamp + (k < half ? 0.0 : 86400.0));
+    const Pose2 truth = between(drive.truth[0], drive.truth[k]);
+    const double e = (merged[k].pose.translation() - truth.translation()).norm();
+    merged_sum += e;
+    worst = std::max(worst, e);
+    one_sum += (one[k].pose.translation() - truth.translation()).norm();
+  }
+  std::cout << "merged: aligned at key scan " << merge.aligned_key << ", " << merge.cross_loops
+            << " loops between the runs; error " << merged_sum / merged.size()
+            << " m mean (largest " << worst << " m), one run " << one_sum / one.size() << " m\n";
+  EXPECT_LT(merged_sum / merged.size(), one_sum / one.size() + 0.01);
+  EXPECT_LT(worst, 0.05);
+
+  // A state without key scans (loop closure off) cannot be searched.
+  PipelineOptions no_loops = islandOptions();
+  no_loops.loop_closure.enabled = false;
+  const StateMerge refused = mergeStates(firstHalf(drive, no_loops).state(), second, no_loops);
+  EXPECT_NE(refused.error.find("no key scans"), std::string::npos) << refused.error;
+  EXPECT_FALSE(refused.problem.has_value());
 }
 
 TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {

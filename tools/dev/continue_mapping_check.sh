@@ -10,13 +10,16 @@
 # stopped, its true start pose), and again with no start pose (--global: it
 # is found in the saved map from its first scans): their causal errors
 # against the same half of the one run, and the scans the global start took.
+# Last, the second half is mapped on its own (a state of its own) and the
+# two halves' states are merged (ekf_slam_merge_states): the merged
+# trajectory's final error against the one run's.
 #   tools/dev/continue_mapping_check.sh DEVEL_DIR [OUT_DIR]
 # DATASETS="intel aces" by default; results in OUT_DIR (default
 # output/continue_mapping/): continue_mapping.md, and per log the runs'
 # folders, and below the table the localised runs' fit to the saved map
 # (tools/analysis/fit_outside_map.py: where the scans that do not fit were
 # taken). Exit code 1 when a half-and-half error exceeds the one run's by
-# more than 5 %.
+# more than 5 %, or the merged one by more than 10 %.
 set -euo pipefail
 devel=${1:?usage: continue_mapping_check.sh DEVEL_DIR [OUT_DIR]}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -30,8 +33,8 @@ fi
 mkdir -p "$out"
 table=$out/continue_mapping.md
 {
-  echo "| log | scans (first half) | causal: one run [m] | causal: two halves [m] | final: one run [m] | final: two halves [m] | loops: first half, at the end | second half causal: one run / localised / global [m] | global start found at scan |"
-  echo "|---|---|---|---|---|---|---|---|---|"
+  echo "| log | scans (first half) | causal: one run [m] | causal: two halves [m] | final: one run [m] | final: two halves [m] | final: two states merged [m] | loops: first half, at the end | second half causal: one run / localised / global [m] | global start found at scan |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 
 mean() {  # relations trajectory -> mean translation error (m) over the relations it holds
@@ -63,6 +66,11 @@ for name in ${DATASETS:-intel aces}; do
   echo "== $name: the rest, localised with no start pose"
   "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/global" --no-maps --first-scan "$half" \
     --resume "$dir/first.state" --localize-only --global > "$dir/global.log" 2>&1 || true
+  echo "== $name: the rest mapped on its own, and the two states merged"
+  "$bin/ekf_slam_offline" --bag "$bag" --out "$dir/second_alone" --no-maps --first-scan "$half" \
+    --save-state "$dir/second_alone.state" > "$dir/second_alone.log" 2>&1
+  "$bin/ekf_slam_merge_states" "$dir/first.state" "$dir/second_alone.state" --out "$dir/merged" \
+    > "$dir/merged.log" 2>&1 || true
   loops_first=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/first/report.txt" | head -n 1)
   loops_second=$(sed -n 's/^loop closure: .* \([0-9]*\) loops accepted.*/\1/p' "$dir/second/report.txt" | head -n 1)
   row="| $name | $half |"
@@ -75,6 +83,18 @@ for name in ${DATASETS:-intel aces}; do
       failed=1
     fi
   done
+  if [ -f "$dir/merged/trajectory_merged.txt" ]; then
+    merged=$(mean "$relations" "$dir/merged/trajectory_merged.txt")
+    one=$(mean "$relations" "$dir/whole/trajectory_smoothed.txt")
+    if ! /usr/bin/python3 -c "import sys; sys.exit(0 if $merged <= 1.10 * $one else 1)"; then
+      echo "continue_mapping_check: $name merged: $merged m against one run $one m (over 10 %)" >&2
+      failed=1
+    fi
+  else
+    merged="not merged ($(tail -n 1 "$dir/merged.log"))"
+    failed=1
+  fi
+  row="$row $merged |"
   # The second half of each run: its scans after the first half's last.
   end=$(awk '!/^#/ {t = $1} END {print t}' "$dir/first/trajectory_live.txt")
   second_half() {  # trajectory -> the same, from the second half's first scan on
