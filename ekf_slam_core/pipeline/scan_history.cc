@@ -51,6 +51,33 @@ ScanHistoryState ScanHistory::state() const {
   return out;
 }
 
+void keepNewestScans(long max_scans, ScanHistoryState* state) {
+  const long drop = static_cast<long>(state->records.size()) - max_scans;
+  if (max_scans <= 0 || drop <= 0) return;
+  state->records.erase(state->records.begin(), state->records.begin() + drop);
+  state->first_record += drop;
+  const int gone = state->records.front().iteration - state->first_iteration;
+  if (gone <= 0 || gone >= static_cast<int>(state->steps.size())) return;
+  // The recorder's own trimming keeps what the remaining sightings need.
+  FullSmootherRecorder recorder;
+  recorder.restore(
+      std::move(state->iterations),
+      std::unordered_map<int, int>(state->merged_into.begin(), state->merged_into.end()),
+      std::unordered_map<int, Vector2>(state->last_estimates.begin(), state->last_estimates.end()),
+      state->steps[gone].filtered, state->steps[gone].filtered_cov);
+  recorder.dropFront(gone);
+  state->steps.erase(state->steps.begin(), state->steps.begin() + gone);
+  state->first_iteration += gone;
+  state->iterations = recorder.iterations();
+  state->merged_into.assign(recorder.mergedInto().begin(), recorder.mergedInto().end());
+  std::sort(state->merged_into.begin(), state->merged_into.end());
+  state->last_estimates.assign(recorder.lastEstimates().begin(), recorder.lastEstimates().end());
+  std::sort(state->last_estimates.begin(), state->last_estimates.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  state->prior_mean = recorder.priorMean();
+  state->prior_covariance = recorder.priorCovariance();
+}
+
 std::string ScanHistory::restore(const ScanHistoryState& state) {
   if (state.steps.size() != state.iterations.size()) {
     return "the history's two records of the iterations differ in length";

@@ -82,6 +82,12 @@ struct ScanHistoryState {
   Matrix3 prior_covariance = Matrix3::Zero();
 };
 
+// Keeps the newest `max_scans` records of `state` (0: all) and the
+// iterations they hang off; the oldest kept iteration becomes the first,
+// with the filter's estimate there as its prior (as a bounded history
+// trims itself).
+void keepNewestScans(long max_scans, ScanHistoryState* state);
+
 class ScanHistory {
  public:
   // `bound`: history_scans. The full smoother's first pose is `prior`.

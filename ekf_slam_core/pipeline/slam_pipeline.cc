@@ -56,6 +56,15 @@ SlamState SlamPipeline::state(const std::string& configuration) const {
     out.front_end = std::move(*front_end);
   }
   out.history = history_.state();
+  keepNewestScans(kSavedHistoryScans, &out.history);
+  // The loop closer's per-scan entries and their records likewise.
+  const auto keepNewest = [](auto* entries) {
+    if (static_cast<long>(entries->size()) > kSavedHistoryScans) {
+      entries->erase(entries->begin(), entries->end() - kSavedHistoryScans);
+    }
+  };
+  keepNewest(&out.back_end.closer.scans);
+  keepNewest(&out.back_end.record_of_loop_scan);
   out.scans = counters_.scans + resumed_scans_;
   if (initialised_) {
     // Resumed from the last iteration, where the filter's pose is.

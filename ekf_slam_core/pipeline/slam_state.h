@@ -10,9 +10,8 @@
 // made with, and the history of the scans and iterations (scan_history.h)
 // that the smoothers and the trajectory files read: a resumed run's full
 // smoother solves the saved scans and the new ones together, as one run's
-// would, and its trajectories cover both. The history is bounded as the
-// pipeline bounds it (PipelineOptions::history_scans: the live node keeps
-// the newest 10,000 scans, the offline runner every scan of its log); the
+// would, and its trajectories cover both. The history holds at most the
+// newest kSavedHistoryScans scans (10,000, the live node's own bound); the
 // rest is bounded by the building (landmarks, key scans: the loop closer
 // lets the readings of a place's surplus key scans go). The occupancy grid
 // is built again from the key scans.
@@ -88,6 +87,12 @@ struct SlamState {
 
 // s: see SlamState::last_stamp.
 constexpr double kResumeGap = 10.0;
+
+// At most this many scans' history go into a state (SlamPipeline::state):
+// the newest, as the live node's history_max_scans keeps them (its
+// default), so that a state is bounded by the building, not by the hours
+// driven, offline too.
+constexpr long kSavedHistoryScans = 10000;
 
 // Where a resumed run's robot stands at its first scan (SlamPipeline::resume).
 enum class ResumeAt {

@@ -369,6 +369,42 @@ TEST_F(SlamStateFile, AResumedRunSmoothsTheSavedScansWithTheNewOnes) {
   EXPECT_LT(two_error, one_error * 1.05 + 0.001);
 }
 
+// A state keeps the newest scans' history only (kSavedHistoryScans),
+// trimmed as a bounded history trims itself: the oldest kept iteration is
+// the first, with the filter's estimate there as its prior. Resumed, it is
+// smoothed with the new scans.
+TEST_F(SlamStateFile, TheSavedHistoryKeepsTheNewestScans) {
+  const Drive drive = islandDrive();
+  const size_t half = drive.scans.size() / 2;
+  SlamState state = firstHalf(drive).state();
+  ASSERT_EQ(state.history.records.size(), half);
+  const int iterations = static_cast<int>(state.history.iterations.size());
+  keepNewestScans(40, &state.history);
+  ASSERT_EQ(state.history.records.size(), 40u);
+  EXPECT_EQ(state.history.first_record, static_cast<long>(half - 40));
+  EXPECT_EQ(state.history.first_iteration, state.history.records.front().iteration);
+  EXPECT_EQ(state.history.first_iteration + static_cast<int>(state.history.iterations.size()),
+            iterations);
+  EXPECT_EQ(state.history.steps.size(), state.history.iterations.size());
+  EXPECT_EQ(state.history.prior_mean.x, state.history.steps.front().filtered.x);
+
+  SlamPipeline resumed(islandOptions());
+  ASSERT_EQ(resumed.resume(state), "");
+  for (size_t i = half; i < drive.scans.size(); ++i) {
+    resumed.processScan(drive.scans[i], drive.odometry[i]);
+  }
+  resumed.finishLoopClosure();
+  const std::vector<StampedPose> poses = resumed.smoothedScanPoses();
+  ASSERT_EQ(poses.size(), 40 + drive.scans.size() - half);
+  EXPECT_EQ(poses.front().stamp, drive.scans[half - 40].stamp);
+  double sum = 0.0;
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const Pose2 truth = between(drive.truth[0], drive.truth[half - 40 + k]);
+    sum += (poses[k].pose.translation() - truth.translation()).norm();
+  }
+  EXPECT_LT(sum / poses.size(), 0.02);
+}
+
 // Merging: the second half of the drive mapped on its own, another day
 // (its odometry from another origin, its own map frame), and joined with
 // the first half's state: found in the first map, loops closed between the
