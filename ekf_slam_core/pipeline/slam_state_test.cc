@@ -278,13 +278,14 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
   size_t lost_at = 0, found_at = 0;
   double lowest_localised = 1.0, highest_carried = 0.0;
   double error_sum = 0.0, worst = 0.0;
-  size_t after = 0;
+  size_t after = 0, placed_at = 0;
   for (size_t i = half; i + skipped < drive.scans.size(); ++i) {
     const size_t t = truthIndex(i);
     if (found) {  // as the node does: at the next scan, carried on by the motion since
       SlamState state = pipeline->state();
       placeRobot(movedOn(*found, between(found_odometry, odometry(i))), placementCovariance(),
                  &state);
+      placed_at = state.history.iterations.size();
       pipeline = makePipeline(state, ResumeAt::kPlacedRobot);
       found.reset();
       lost.reset();
@@ -329,6 +330,14 @@ TEST_F(SlamStateFile, AKidnappedRobotIsLostThenFoundAgainInTheSavedMap) {
   ASSERT_GT(after, 50u);
   EXPECT_LT(error_sum / after, 0.05);
   EXPECT_LT(worst, 0.1);
+  // The history goes on across the placement, its chain of motion edges
+  // broken there (placeRobot: the robot does not continue the saved run's
+  // last iteration): the odometry did not see the carrying.
+  const std::vector<SmootherIteration>& iterations = pipeline->smootherRecord().iterations();
+  ASSERT_GT(iterations.size(), placed_at + 1);
+  EXPECT_TRUE(iterations[placed_at - 1].has_control);
+  EXPECT_FALSE(iterations[placed_at].has_control) << "a motion edge across the placement";
+  EXPECT_TRUE(iterations[placed_at + 1].has_control);
 }
 
 // The history goes with the state: a run resumed at the log's next scan
