@@ -39,14 +39,13 @@ bool OccupancyGrid::contains(const Vector2& a, const Vector2& b) const {
          max_x < origin_.x() + width_ * res && max_y < origin_.y() + height_ * res;
 }
 
-bool OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b) {
+bool OccupancyGrid::ensureContains(const Vector2& a, const Vector2& b, double margin) {
   if (!a.allFinite() || !b.allFinite()) return false;
   if (contains(a, b)) return true;
   const double res = options_.resolution;
   const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
   const double min_y = std::min(a.y(), b.y()), max_y = std::max(a.y(), b.y());
   const double cur_max_x = origin_.x() + width_ * res, cur_max_y = origin_.y() + height_ * res;
-  const double margin = options_.grow_margin;
   double new_min_x = min_x - margin, new_min_y = min_y - margin;
   double new_max_x = max_x + margin, new_max_y = max_y + margin;
   if (width_ > 0) {
@@ -118,6 +117,39 @@ void OccupancyGrid::traceRay(int x0, int y0, int x1, int y1, bool mark_end) {
   end = mark_end ? std::min(clamp, end + log_hit_) : std::max(-clamp, end + log_miss_);
 }
 
+bool OccupancyGrid::rayEnd(const Pose2& laser_pose, const Scan& scan, int i, Vector2* end,
+                           bool* hit) const {
+  const double r = scan.ranges[i];
+  *hit = scan.isValid(i);
+  double length = r;
+  if (!*hit) {
+    // No return: optionally clear a stretch of free space, never a hit.
+    const bool no_return = (std::isinf(r) && r > 0) || (std::isfinite(r) && r >= scan.range_max);
+    if (!no_return || options_.no_return_free_range <= 0.0) return false;
+    length = options_.no_return_free_range;
+  } else if (r > options_.max_insert_range) {
+    return false;
+  }
+  const double bearing = laser_pose.theta + scan.angle(i);
+  if (!std::isfinite(bearing)) return false;  // a sweep whose bearings overflow
+  *end = laser_pose.translation() + length * Vector2(std::cos(bearing), std::sin(bearing));
+  return true;
+}
+
+void OccupancyGrid::extendToScan(const Pose2& laser_pose, const Scan& scan, Vector2* low,
+                                 Vector2* high) const {
+  if (!laser_pose.allFinite()) return;
+  *low = low->cwiseMin(laser_pose.translation());
+  *high = high->cwiseMax(laser_pose.translation());
+  for (int i = 0; i < scan.size(); ++i) {
+    Vector2 end;
+    bool hit;
+    if (!rayEnd(laser_pose, scan, i, &end, &hit)) continue;
+    *low = low->cwiseMin(end);
+    *high = high->cwiseMax(end);
+  }
+}
+
 void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
   if (!laser_pose.allFinite()) return;
   const Vector2 origin = laser_pose.translation();
@@ -127,21 +159,10 @@ void OccupancyGrid::insertScan(const Pose2& laser_pose, const Scan& scan) {
       Vector2::Constant(std::max(options_.max_insert_range, options_.no_return_free_range));
   const bool covered = contains(origin - reach, origin + reach);
   for (int i = 0; i < scan.size(); ++i) {
-    const double r = scan.ranges[i];
-    bool hit = scan.isValid(i);
-    double length = r;
-    if (!hit) {
-      // No return: optionally clear a stretch of free space, never a hit.
-      const bool no_return = (std::isinf(r) && r > 0) || (std::isfinite(r) && r >= scan.range_max);
-      if (!no_return || options_.no_return_free_range <= 0.0) continue;
-      length = options_.no_return_free_range;
-    } else if (r > options_.max_insert_range) {
-      continue;
-    }
-    const double bearing = laser_pose.theta + scan.angle(i);
-    if (!std::isfinite(bearing)) continue;  // a sweep whose bearings overflow
-    const Vector2 end = origin + length * Vector2(std::cos(bearing), std::sin(bearing));
-    if (!covered && !ensureContains(origin, end)) {
+    Vector2 end;
+    bool hit;
+    if (!rayEnd(laser_pose, scan, i, &end, &hit)) continue;
+    if (!covered && !ensureContains(origin, end, options_.grow_margin)) {
       ++rays_beyond_limit_;
       continue;
     }
@@ -155,7 +176,7 @@ void OccupancyGrid::insertHits(const Vector2& origin, const std::vector<Vector2>
   if (!origin.allFinite()) return;
   for (const Vector2& end : endpoints) {
     if (!end.allFinite() || (end - origin).norm() > options_.max_insert_range) continue;
-    if (!ensureContains(origin, end)) {
+    if (!ensureContains(origin, end, options_.grow_margin)) {
       ++rays_beyond_limit_;
       continue;
     }

@@ -54,13 +54,18 @@ class OccupancyGrid {
   // Inserts one scan taken with the laser at `laser_pose` (map frame).
   void insertScan(const Pose2& laser_pose, const Scan& scan);
 
-  // Grows the grid once to hold the rectangle [low, high] (plus the grow
-  // margin). When the extent of many scans is known beforehand (every laser
-  // pose ± max_insert_range), this replaces the repeated reallocations of a
-  // grid that grows scan by scan: on a 400 m site those copies dominated the
-  // time and doubled the peak memory.
+  // Grows the grid once to hold the rectangle [low, high], without the grow
+  // margin. When the extent of many scans is known beforehand
+  // (extendToScan), this replaces the repeated reallocations of a grid that
+  // grows scan by scan: on a 400 m site those copies dominated the time and
+  // doubled the peak memory.
   // False (and the grid unchanged) when that would exceed max_cells.
-  bool cover(const Vector2& low, const Vector2& high) { return ensureContains(low, high); }
+  bool cover(const Vector2& low, const Vector2& high) { return ensureContains(low, high, 0.0); }
+
+  // Widens the box [*low, *high] to hold every ray insertScan(laser_pose,
+  // scan) would trace: the extent to cover() for a log's scans, no larger
+  // than what their rays reach.
+  void extendToScan(const Pose2& laser_pose, const Scan& scan, Vector2* low, Vector2* high) const;
 
   // Inserts beams from `origin` that ended at `endpoints` (map frame): each
   // a hit at its end, free space before it (a key scan's kept readings).
@@ -93,10 +98,15 @@ class OccupancyGrid {
 
  private:
   bool cellOf(double x, double y, int* ix, int* iy) const;
+  // Where beam i of a scan from `laser_pose` ends as insertScan traces it,
+  // and whether it ends in a hit; false when it is not traced.
+  bool rayEnd(const Pose2& laser_pose, const Scan& scan, int i, Vector2* end, bool* hit) const;
   // Whether the grid holds the rectangle with corners a and b.
   bool contains(const Vector2& a, const Vector2& b) const;
-  // False when holding [a, b] would exceed max_cells (nothing changes).
-  bool ensureContains(const Vector2& a, const Vector2& b);
+  // Grows the grid, when it must, to hold [a, b] and `margin` m beyond each
+  // side it grows on. False when that would exceed max_cells (nothing
+  // changes).
+  bool ensureContains(const Vector2& a, const Vector2& b, double margin);
   void traceRay(int x0, int y0, int x1, int y1, bool mark_end);
   float& at(int ix, int iy) { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }
   float at(int ix, int iy) const { return log_odds_[static_cast<size_t>(iy) * width_ + ix]; }

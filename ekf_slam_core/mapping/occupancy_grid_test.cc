@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -151,6 +152,45 @@ namespace {
 
 // Beams given by their end points (a key scan's readings): free before the
 // end, occupied at it, unknown beyond; readings past max_insert_range left out.
+// Covered to the extent extendToScan gives, a grid holds every ray of the
+// scans without growing, no wider than the rays reach (a cell of rounding
+// each side), and knows the room as a grid that grew ray by ray does.
+TEST(OccupancyGrid, CoveredToTheRaysExtentItHoldsThemAllWithoutGrowing) {
+  sim::PolygonWorld room;
+  room.addPolygon({{0, 0}, {5, 0}, {5, 3.5}, {0, 3.5}});
+  const Pose2 poses[] = {Pose2(1, 1, 0), Pose2(4, 2.5, kPi), Pose2(2.5, 1.7, kPi / 2)};
+  OccupancyGrid covered, grown;
+  Vector2 low = Vector2::Constant(std::numeric_limits<double>::infinity());
+  Vector2 high = -low;
+  for (const Pose2& pose : poses) covered.extendToScan(pose, scanFrom(room, pose), &low, &high);
+  // The walls the rays end on, and nothing beyond them.
+  EXPECT_NEAR(low.x(), 0.0, 0.06);
+  EXPECT_NEAR(low.y(), 0.0, 0.06);
+  EXPECT_NEAR(high.x(), 5.0, 0.06);
+  EXPECT_NEAR(high.y(), 3.5, 0.06);
+  ASSERT_TRUE(covered.cover(low, high));
+  const int width = covered.width(), height = covered.height();
+  EXPECT_LE(width * covered.resolution(), high.x() - low.x() + 2 * covered.resolution());
+  EXPECT_LE(height * covered.resolution(), high.y() - low.y() + 2 * covered.resolution());
+  for (const Pose2& pose : poses) {
+    covered.insertScan(pose, scanFrom(room, pose));
+    grown.insertScan(pose, scanFrom(room, pose));
+  }
+  EXPECT_EQ(covered.width(), width);
+  EXPECT_EQ(covered.height(), height);
+  EXPECT_EQ(covered.raysBeyondLimit(), 0);
+  // The same room on another lattice (the grown grid's starts at its first
+  // ray): as many cells known, to the cells a lattice shift moves.
+  const auto known = [](const OccupancyGrid& grid) {
+    int count = 0;
+    for (int8_t v : grid.trinaryValues()) count += v >= 0;
+    return count;
+  };
+  EXPECT_NEAR(known(covered), known(grown), 0.02 * known(grown));
+  EXPECT_GT(nearWall(covered, 2.5, 0.0), 0.65);
+  EXPECT_GT(nearWall(covered, 5.0, 1.7), 0.65);
+}
+
 TEST(OccupancyGrid, HitsGivenAsEndPointsMarkFreeSpaceAndTheEnd) {
   OccupancyGridOptions options;
   options.max_insert_range = 5.0;

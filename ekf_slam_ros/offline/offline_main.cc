@@ -122,19 +122,13 @@ ekf_slam::OccupancyGrid buildMap(const ekf_slam::OccupancyGridOptions& options,
                                  const std::vector<ekf_slam::StampedPose>& poses,
                                  const Pose2& laser) {
   ekf_slam::OccupancyGrid grid(options);
-  // Size the grid once: every laser position ± the longest inserted reading.
+  // Size the grid once, to what the rays reach.
   Eigen::Vector2d low = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d high = -low;
   for (size_t i = 0; i < poses.size() && i < log.scans.size(); ++i) {
-    const Pose2 laser_pose = ekf_slam::compose(poses[i].pose, laser);
-    if (!laser_pose.allFinite()) continue;
-    low = low.cwiseMin(laser_pose.translation());
-    high = high.cwiseMax(laser_pose.translation());
+    grid.extendToScan(ekf_slam::compose(poses[i].pose, laser), log.scans[i].scan, &low, &high);
   }
-  if (low.allFinite() && high.allFinite()) {
-    const Eigen::Vector2d reach = Eigen::Vector2d::Constant(options.max_insert_range);
-    grid.cover(low - reach, high + reach);
-  }
+  if (low.allFinite() && high.allFinite()) grid.cover(low, high);
   for (size_t i = 0; i < poses.size() && i < log.scans.size(); ++i) {
     grid.insertScan(ekf_slam::compose(poses[i].pose, laser), log.scans[i].scan);
   }

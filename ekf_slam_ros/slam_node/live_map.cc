@@ -26,16 +26,24 @@ nav_msgs::OccupancyGrid toOccupancyGridMessage(const OccupancyGrid& grid,
 OccupancyGrid gridFromKeyScans(const std::vector<SlamPipeline::KeyScan>& keys, const Pose2& laser,
                                const OccupancyGridOptions& options) {
   OccupancyGrid grid(options);
+  // Sized once to the laser positions and the hits insertHits keeps.
   Vector2 low = Vector2::Constant(std::numeric_limits<double>::infinity());
   Vector2 high = -low;
+  const auto extend = [&](const Vector2& p) {
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  };
   for (const SlamPipeline::KeyScan& key : keys) {
     if (!key.pose.allFinite()) continue;
-    low = low.cwiseMin(key.pose.translation());
-    high = high.cwiseMax(key.pose.translation());
+    const Vector2 origin = transformFrom(key.pose, laser.translation());
+    extend(origin);
+    for (const Vector2& p : key.points) {
+      const Vector2 end = transformFrom(key.pose, p);
+      if ((end - origin).norm() <= options.max_insert_range) extend(end);
+    }
   }
   if (!low.allFinite()) return grid;
-  const Vector2 reach = Vector2::Constant(options.max_insert_range);
-  grid.cover(low - reach, high + reach);
+  grid.cover(low, high);
   std::vector<Vector2> ends;
   for (const SlamPipeline::KeyScan& key : keys) {
     if (!key.pose.allFinite()) continue;
