@@ -450,6 +450,22 @@ std::vector<Vector2> LoopCloser::queryPoints(int key, bool sparse) const {
   return gridThinned(merged, sparse ? options_.search_point_spacing : icp_.min_point_spacing);
 }
 
+KeyRange loopSubmapKeys(const LoopClosureOptions& options, int candidate, int key_count,
+                        double guess_heading,
+                        const std::function<double(int)>& travel_from_previous) {
+  KeyRange range;
+  range.first = std::max(0, candidate - options.submap_half_width);
+  range.last = std::min(key_count - 1, candidate + options.submap_half_width);
+  if (std::abs(wrapAngle(guess_heading)) > kPi / 2.0) {
+    double travel = 0.0;
+    for (int m = candidate; m > 0 && travel < options.reverse_submap_travel; --m) {
+      travel += travel_from_previous(m);
+      range.first = std::min(range.first, m - 1);
+    }
+  }
+  return range;
+}
+
 LoopVerdict verifyLoop(const std::vector<Vector2>& query, const std::vector<Vector2>& sparse_query,
                        const std::vector<Vector2>& submap, const Pose2& guess, double radius,
                        double angle, const LoopClosureOptions& options,
@@ -508,10 +524,11 @@ bool LoopCloser::verify(int candidate, int key, const Pose2& guess, double radiu
   // (locally consistent). Recent key scans are left out: matching them
   // would only repeat the front end.
   const Pose2& origin = graph_.pose(candidate);
-  const int last = static_cast<int>(keys_.size()) - 1;
+  const KeyRange range =
+      loopSubmapKeys(options_, candidate, static_cast<int>(keys_.size()), guess.theta,
+                     [this](int m) { return keys_[m].travel_from_previous; });
   std::vector<Vector2> submap;
-  for (int m = std::max(0, candidate - options_.submap_half_width);
-       m <= std::min(last, candidate + options_.submap_half_width); ++m) {
+  for (int m = range.first; m <= range.last; ++m) {
     const Pose2 placement = between(origin, graph_.pose(m));
     for (const Vector2& p : *keys_[m].points) submap.push_back(transformFrom(placement, p));
   }

@@ -14,12 +14,14 @@
 //   deviations of the chain that links them. The window grows without a
 //   practical bound with the distance (d^1.5): after a long loop it covers
 //   the whole map, so a loop is found however far the front end drifted.
-// - Verification: the recent key scans, merged in the new key scan's frame
-//   (a few metres of travel: the LMS200 sees 180°, a place revisited in the
-//   other direction shares little with one scan), are searched
-//   exhaustively (correlative, multi-level branch and bound) over the
-//   whole window and any heading it allows against a submap of the
-//   candidate and its neighbours, then refined by point-to-line ICP. A loop
+// - Verification: the new key scan (with the recent ones, query_keys) is
+//   searched exhaustively (correlative, multi-level branch and bound) over
+//   the whole window and any heading it allows against a submap of the
+//   candidate and its neighbours, then refined by point-to-line ICP. The
+//   LMS200 sees 180°: a place revisited the other way round shares little
+//   with the candidate's own view, but what it sees the key scans before
+//   the candidate saw ahead of them, so there the submap reaches back along
+//   the candidate's path over the readings' reach (loopSubmapKeys). A loop
 //   is accepted only when the correlative score, the ICP inlier fraction and
 //   the residual are strong, the match constrains every direction (no
 //   sliding along a corridor), and along its weakest direction it explains
@@ -33,6 +35,7 @@
 //   front end's increment since that key scan.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -82,8 +85,14 @@ struct LoopClosureOptions {
   // the uniqueness test below keeps a look-alike from passing.
   int max_candidates = 5;
   int submap_half_width = 5;  // key scans each side of the candidate in its submap
-  int query_keys = 0;         // recent key scans merged into the query (0: the key scan alone)
-  int retry_interval = 3;     // key scans to wait after a refused candidate
+  // A place revisited the other way round (the candidate's heading and the
+  // query's more than 90° apart): the query sees what the key scans before
+  // the candidate saw ahead of them, not what the candidate saw, so its
+  // submap also reaches back along the candidate's own path over this much
+  // travel, about the readings' reach (max_range). 0: the usual submap.
+  double reverse_submap_travel = 15.0;  // m
+  int query_keys = 0;      // recent key scans merged into the query (0: the key scan alone)
+  int retry_interval = 3;  // key scans to wait after a refused candidate
   // Memory over long runs. A key scan taken where max_keyscans_per_place
   // earlier key scans that hold readings already lie (within place_radius
   // and place_angle of its pose, after the loop search it triggered) keeps
@@ -106,7 +115,11 @@ struct LoopClosureOptions {
   CorrelativeMatcherOptions correlative;
   double search_point_spacing = 0.15;  // m: key-scan points thinned for the correlative search
   double min_score = 0.55;             // mean likelihood of the correlative match
-  double min_inlier_fraction = 0.7;    // of the key scan's points paired by ICP
+  // Of the key scan's points paired by ICP: a place seen again an hour
+  // later outdoors (parked cars, people) or the other way round (the far
+  // sides of free-standing things) keeps fewer of its points than one seen
+  // again indoors a minute on.
+  double min_inlier_fraction = 0.6;
   double max_rms_residual = 0.04;      // m, ICP point-to-line
   double max_degenerate_sigma = 0.03;  // m: 1-sigma of the match along its weakest direction
   // Of the query's own structure along that weakest direction (its points
@@ -186,6 +199,7 @@ struct LoopClosureOptions {
     v.number("max_heading_difference", max_heading_difference, Bounds::openClosed(0.0, kPi, "rad"));
     v.integer("max_candidates", max_candidates, Bounds::closed(1, 1000));
     v.integer("submap_half_width", submap_half_width, Bounds::closed(0, 1000, "key scans"));
+    v.number("reverse_submap_travel", reverse_submap_travel, Bounds::closed(0.0, 1000.0, "m"));
     v.integer("query_keys", query_keys, Bounds::closed(0, 1000, "key scans"));
     v.integer("retry_interval", retry_interval, Bounds::closed(0, 100000, "key scans"));
     v.integer("max_keyscans_per_place", max_keyscans_per_place,
@@ -258,6 +272,19 @@ double explainedStructure(const std::vector<Vector2>& query, const PointCloudRef
 // `graph_distance` metres of chain (the drift model above): m, and rad.
 double loopSearchRadius(const LoopClosureOptions& options, double graph_distance);
 double loopSearchAngle(const LoopClosureOptions& options, double graph_distance);
+
+// The key scans first..last (inclusive, of key_count) of the submap a
+// query is matched against when `candidate` is tried at relative heading
+// `guess_heading` (the query's in the candidate's frame): submap_half_width
+// each side, and for a reverse revisit (|guess_heading| > 90°) the
+// candidate's path back over reverse_submap_travel. travel_from_previous(m)
+// is the travel from key scan m − 1 to m.
+struct KeyRange {
+  int first = 0, last = -1;
+};
+KeyRange loopSubmapKeys(const LoopClosureOptions& options, int candidate, int key_count,
+                        double guess_heading,
+                        const std::function<double(int)>& travel_from_previous);
 
 // What a loop verification decided (verifyLoop).
 enum class LoopVerdict { kAccepted, kRefusedByScore, kRefusedByFit, kDegenerate, kAmbiguous };

@@ -265,14 +265,17 @@ StateMerge mergeStates(const SlamState& first, const SlamState& second,
     for (const auto& [distance, candidate] : candidates) {
       ++out.cross_tried;
       const Pose2& origin = graph.pose(candidate);
+      const Pose2 guess = between(origin, placed);
+      const KeyRange range = loopSubmapKeys(lc, candidate, first_nodes, guess.theta, [&](int m) {
+        return first_keys[m].travel_from_previous;
+      });
       std::vector<Vector2> submap;
-      for (int m = std::max(0, candidate - lc.submap_half_width);
-           m <= std::min(first_nodes - 1, candidate + lc.submap_half_width); ++m) {
+      for (int m = range.first; m <= range.last; ++m) {
         const Pose2 placement = between(origin, graph.pose(m));
         for (const Vector2& p : first_keys[m].points) submap.push_back(transformFrom(placement, p));
       }
-      if (verifyLoop(query, sparse, submap, between(origin, placed), radius, angle, lc, icp, &grid,
-                     relative) == LoopVerdict::kAccepted) {
+      if (verifyLoop(query, sparse, submap, guess, radius, angle, lc, icp, &grid, relative) ==
+          LoopVerdict::kAccepted) {
         *near = candidate;
         return true;
       }
