@@ -39,6 +39,7 @@ tools/dev/mecp_sim_comparison.sh   # runs the source tree's config/ and tools/ci
 tools/dev/stage_comparison.sh      # reads ../shared/datasets beside the checkout
 tools/dev/replay_screenshots.sh    # starts the source tree's tools/dev/rviz_screenshot.py, writes docs/images
 tools/dev/continue_mapping_check.sh # reads ../shared/datasets beside the checkout
+tools/dev/tolerance_sweep.sh       # reads ../shared/datasets beside the checkout
 tools/dev/chapter5_figures.sh      # make figures: reads ../shared/datasets beside the checkout
 tools/dev/compare_outputs.sh       # compares two benchmark output folders of the checkout
 tools/dev/code_shape.py            # measures class, function and member-list sizes of the checkout
