@@ -49,11 +49,13 @@ struct GlobalLocalizationOptions {
   double retry_travel = 0.5;              // m: moved this far (or turned retry_turn) for a new try
   double retry_turn = 0.5;                // rad
   double min_score = 0.6;                 // mean likelihood of the query at the place
-  double min_inlier_fraction = 0.7;       // of the query's points paired by ICP
-  double max_rms_residual = 0.05;         // m, ICP point-to-line
-  double max_icp_shift = 0.3;             // m: ICP may move the search's pose this far
-  double distinct_radius = 2.0;           // m: another place is this far from the best
-  double max_runner_up_ratio = 0.85;      // of the best score
+  // Of the query's points paired by ICP: as a loop's (LoopClosureOptions),
+  // a place seen again later keeps fewer of its points.
+  double min_inlier_fraction = 0.6;
+  double max_rms_residual = 0.05;     // m, ICP point-to-line
+  double max_icp_shift = 0.3;         // m: ICP may move the search's pose this far
+  double distinct_radius = 2.0;       // m: another place is this far from the best
+  double max_runner_up_ratio = 0.85;  // of the best score
   // Lost (LostDetector): lost_scans scans in a row fit under lost_score
   // near where the robot is estimated to stand (fitNear: the best place
   // within fit_window and fit_angle, so that a robot localised a few
