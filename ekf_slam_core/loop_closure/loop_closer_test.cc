@@ -852,8 +852,9 @@ TEST(LoopClosureBackEnd, DelayZeroIsTheSynchronousLoopCloser) {
   expectBitIdentical(inline_run.closed, sync.closed, "final");
   // The view names the graph's loops, for drawing them: as many as were
   // accepted (none is dropped before finish), each joining key scans of
-  // the two laps that stood in the same part of the hall (a few metres
-  // apart at most; that they measure the truth, ClosesADriftedLoop...).
+  // the two laps that stood in the same part of the hall, within 3 m
+  // (ClosesADriftedLoopAndPullsTheTrajectoryBack checks that the same
+  // loops measure the truth).
   EXPECT_EQ(static_cast<long>(inline_run.loop_true_distance.size()), sync.counters.accepted);
   EXPECT_EQ(inline_run.heading_loops, sync.counters.heading_loops);
   for (size_t i = 0; i < inline_run.loop_true_distance.size(); ++i) {
