@@ -23,7 +23,7 @@ BackEndLink::BackEndLink(const PipelineOptions& options)
 
 BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pose2& new_odometry,
                                        bool usable, const Pose2& filtered, long record,
-                                       const std::vector<int>& observed) {
+                                       const std::vector<int>& observed, const EkfSlam& filter) {
   if (resume_at_) {
     front_end_offset_ = compose(*resume_at_, inverse(new_odometry));
     resume_at_.reset();
@@ -34,7 +34,13 @@ BackEndLink::Step BackEndLink::addScan(double stamp, const Scan& scan, const Pos
   const int loop_scan = first_loop_scan_ + static_cast<int>(record_of_loop_scan_.size());
   record_of_loop_scan_.push_back(record);
   pending_filtered_.push_back(filtered);
-  for (int id : observed) landmark_scan_[id] = loop_scan;
+  for (int id : observed) {
+    landmark_scan_[id] = loop_scan;
+    const int slot = filter.slotOf(id);
+    if (slot >= 0 && filter.landmarkKind(slot) == LandmarkKind::kPoint) {
+      point_seen_at_[id] = filter.landmarkPosition(slot);
+    }
+  }
   view_ = back_end_->addScan(stamp, scan, laser_pose_, odometry, usable);
   const Pose2 graph_pose = view_->poseOf(odometry);
   if (!map_from_graph_) map_from_graph_ = compose(filtered, inverse(graph_pose));
@@ -70,7 +76,12 @@ void BackEndLink::trackKeyScans() {
 // updates then agree with the closed loop instead of pulling the robot back
 // to the drifted map.
 std::vector<std::pair<int, Pose2>> BackEndLink::reanchorCorrections(const EkfSlam& filter) {
-  std::vector<std::pair<int, Pose2>> corrections = landmarkCorrections(filter);
+  std::vector<std::pair<int, Pose2>> corrections = keyCorrections(filter);
+  // The estimates at the latest sightings move with their landmarks.
+  for (const auto& [id, c] : corrections) {
+    const auto seen = point_seen_at_.find(id);
+    if (seen != point_seen_at_.end()) seen->second = transformFrom(c, seen->second);
+  }
   const BackEndView& view = *view_;
   for (size_t k = 0; k < key_filtered_.size(); ++k) {
     key_filtered_[k] = compose(*map_from_graph_, view.key_poses[k]);
@@ -79,6 +90,18 @@ std::vector<std::pair<int, Pose2>> BackEndLink::reanchorCorrections(const EkfSla
 }
 
 std::vector<std::pair<int, Pose2>> BackEndLink::landmarkCorrections(const EkfSlam& filter) const {
+  std::vector<std::pair<int, Pose2>> corrections = keyCorrections(filter);
+  for (auto& [id, c] : corrections) {
+    const auto seen = point_seen_at_.find(id);
+    if (seen == point_seen_at_.end()) continue;
+    // First back to the latest sighting's estimate, then with the key scan.
+    const Vector2 back = seen->second - filter.landmarkPosition(filter.slotOf(id));
+    c = compose(c, Pose2(back.x(), back.y(), 0.0));
+  }
+  return corrections;
+}
+
+std::vector<std::pair<int, Pose2>> BackEndLink::keyCorrections(const EkfSlam& filter) const {
   std::vector<std::pair<int, Pose2>> corrections;
   if (!view_ || !map_from_graph_) return corrections;
   const BackEndView& view = *view_;
@@ -108,6 +131,9 @@ void BackEndLink::forgetBefore(long first_record, const EkfSlam& filter) {
   for (auto it = landmark_scan_.begin(); it != landmark_scan_.end();) {
     it = filter.slotOf(it->first) < 0 ? landmark_scan_.erase(it) : std::next(it);
   }
+  for (auto it = point_seen_at_.begin(); it != point_seen_at_.end();) {
+    it = filter.slotOf(it->first) < 0 ? point_seen_at_.erase(it) : std::next(it);
+  }
 }
 
 BackEndLinkState BackEndLink::state() const {
@@ -122,6 +148,9 @@ BackEndLinkState BackEndLink::state() const {
   }
   out.landmark_scan.assign(landmark_scan_.begin(), landmark_scan_.end());
   std::sort(out.landmark_scan.begin(), out.landmark_scan.end());
+  out.point_seen_at.assign(point_seen_at_.begin(), point_seen_at_.end());
+  std::sort(out.point_seen_at.begin(), out.point_seen_at.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   out.has_map_from_graph = map_from_graph_.has_value();
   if (map_from_graph_) out.map_from_graph = *map_from_graph_;
   out.last_front_end = last_front_end_;
@@ -146,6 +175,8 @@ std::string BackEndLink::resume(const BackEndLinkState& state, bool same_frame) 
   pending_base_ = state.closer.scan_count;
   landmark_scan_ =
       std::unordered_map<int, int>(state.landmark_scan.begin(), state.landmark_scan.end());
+  point_seen_at_ =
+      std::unordered_map<int, Vector2>(state.point_seen_at.begin(), state.point_seen_at.end());
   map_from_graph_.reset();
   if (state.has_map_from_graph) map_from_graph_ = state.map_from_graph;
   last_front_end_ = state.last_front_end;

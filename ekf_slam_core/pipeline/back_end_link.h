@@ -38,17 +38,24 @@ class BackEndLink {
   // Every scan with a usable odometry, in order: `odometry` is the control
   // source's pose, `filtered` the pose the filter gave the scan, `record`
   // the scan's number in the history, `observed` the ids of the landmarks
-  // the scan matched or created.
+  // the scan matched or created, `filter` the filter after the scan's update.
   Step addScan(double stamp, const Scan& scan, const Pose2& odometry, bool usable,
-               const Pose2& filtered, long record, const std::vector<int>& observed);
+               const Pose2& filtered, long record, const std::vector<int>& observed,
+               const EkfSlam& filter);
 
   // After new loops: per landmark of `filter` last observed at a known
   // loop scan, the transform that takes the key scan at or before it
   // from where the filter had it to where the graph has it now. The key
   // scans are taken as re-anchored.
   std::vector<std::pair<int, Pose2>> reanchorCorrections(const EkfSlam& filter);
-  // The same transforms, the key scans left as they are: where re-anchoring
-  // would move each landmark now (for drawing the map in the graph's frame).
+  // Where each landmark is drawn in the graph's frame now, as a transform
+  // of its place in `filter`: the key scan's correction (the key scans left
+  // as they are) applied, for a point landmark, to where the filter had it
+  // right after its latest sighting. Between sightings the filter moves a
+  // landmark with every correction of the robot (their correlation: a
+  // heading update swings the corners behind the robot round it), while
+  // its key scan stays where the graph put it; drawn with those moves,
+  // landmarks passed minutes ago stood in the corridors of the grid.
   std::vector<std::pair<int, Pose2>> landmarkCorrections(const EkfSlam& filter) const;
 
   // The history dropped its records before `first_record`: so are the
@@ -107,6 +114,10 @@ class BackEndLink {
  private:
   // The filter's pose at each key scan the back end has reported.
   void trackKeyScans();
+  // Per landmark last observed at a known loop scan, the transform that
+  // takes its key scan from where the filter had it to where the graph has
+  // it now.
+  std::vector<std::pair<int, Pose2>> keyCorrections(const EkfSlam& filter) const;
 
   Pose2 laser_pose_;
   // The back end by pointer (it may run a thread of its own); a copy of the
@@ -132,8 +143,11 @@ class BackEndLink {
   std::deque<Pose2> pending_filtered_;  // the filter's pose at loop scans pending_base_ …
   long pending_base_ = 0;               // … on, whose key scans the back end may still report
   std::unordered_map<int, int> landmark_scan_;  // landmark id → loop scan last observing it
-  std::optional<Pose2> map_from_graph_;         // the graph's frame in the map frame (first scan)
-  Pose2 last_front_end_;                        // the back end's front-end pose at the last scan
+  // Point landmark id → the filter's estimate right after its latest
+  // sighting (map frame; moved with its key scan by re-anchoring).
+  std::unordered_map<int, Vector2> point_seen_at_;
+  std::optional<Pose2> map_from_graph_;  // the graph's frame in the map frame (first scan)
+  Pose2 last_front_end_;                 // the back end's front-end pose at the last scan
   // After a resume: where the saved run stopped (until the first scan) and
   // then the transform from the new front end's frame to the saved one's.
   std::optional<Pose2> resume_at_;

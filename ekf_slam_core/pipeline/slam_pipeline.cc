@@ -302,8 +302,9 @@ void SlamPipeline::record(double stamp, const Scan* scan, const Pose2& odometry,
                           ScanResult* out) {
   Pose2 causal = out->pose;
   if (back_end_.active() && scan != nullptr) {
-    const BackEndLink::Step step = back_end_.addScan(stamp, *scan, odometry, usable, out->pose,
-                                                     history_.recordedScans(), observedIds(*out));
+    const BackEndLink::Step step =
+        back_end_.addScan(stamp, *scan, odometry, usable, out->pose, history_.recordedScans(),
+                          observedIds(*out), filter_.filter());
     causal = step.causal;
     if (step.new_loops && options_.loop_closure.reanchor_filter) {
       // The filter takes the loop-closed geometry: the robot moves to the

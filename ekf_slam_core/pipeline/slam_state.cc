@@ -43,6 +43,7 @@ uint64_t getUnsigned(const char* data, int bytes) {
 class Writer {
  public:
   static constexpr bool kReading = false;
+  uint32_t version() const { return kSlamStateVersion; }
   void item(double& v) {
     uint64_t bits;
     std::memcpy(&bits, &v, sizeof(bits));
@@ -79,7 +80,9 @@ class Writer {
 class Reader {
  public:
   static constexpr bool kReading = true;
-  Reader(const char* data, size_t size) : data_(data), size_(size) {}
+  Reader(const char* data, size_t size, uint32_t version)
+      : data_(data), size_(size), version_(version) {}
+  uint32_t version() const { return version_; }
   void item(double& v) {
     const uint64_t bits = take(8);
     std::memcpy(&v, &bits, sizeof(v));
@@ -144,6 +147,7 @@ class Reader {
 
   const char* data_;
   size_t size_;
+  uint32_t version_;
   size_t at_ = 0;
   std::string error_;
 };
@@ -385,6 +389,13 @@ void describe(Archive& a, SlamState& s) {
   a.item(s.last_stamp);
   a.item(s.last_raw_odometry);
   describe(a, s.history);
+  // What later versions added comes last.
+  if (a.version() >= 4) {
+    list(a, s.back_end.point_seen_at, 24, [&](std::pair<int, Vector2>& l) {
+      a.item(l.first);
+      a.item(l.second);
+    });
+  }
 }
 
 // What decoding cannot see field by field: the landmarks' layout in the
@@ -440,10 +451,10 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   }
   if (bytes.size() < kHeaderSize) return "the state ends inside its header";
   const uint32_t version = static_cast<uint32_t>(getUnsigned(bytes.data() + kMagicSize, 4));
-  if (version != kSlamStateVersion) {
-    return "state format version " + std::to_string(version) + "; this build reads version " +
-           std::to_string(kSlamStateVersion) +
-           (version < kSlamStateVersion
+  if (version < kOldestSlamStateVersion || version > kSlamStateVersion) {
+    return "state format version " + std::to_string(version) + "; this build reads versions " +
+           std::to_string(kOldestSlamStateVersion) + " to " + std::to_string(kSlamStateVersion) +
+           (version < kOldestSlamStateVersion
                 ? " (an older state holds no history of the scans: map the log again)"
                 : "");
   }
@@ -456,7 +467,7 @@ std::string decodeSlamState(const std::string& bytes, SlamState* state) {
   if (fnv1a(payload, length) != getUnsigned(payload + length, 8)) {
     return "the state's checksum does not match its content (the file is corrupt)";
   }
-  Reader reader(payload, length);
+  Reader reader(payload, length, version);
   SlamState read;
   describe(reader, read);
   if (reader.ok() && !reader.atEnd()) reader.fail("bytes after the state's last field");

@@ -45,15 +45,21 @@
 
 namespace ekf_slam {
 
-// The version this build writes and reads. Versions 1 and 2 held no
-// history of the scans and are refused by name.
-constexpr uint32_t kSlamStateVersion = 3;
+// The version this build writes; it reads this one and version 3 (without
+// the point landmarks' estimates at their latest sightings). Versions 1
+// and 2 held no history of the scans and are refused by name.
+constexpr uint32_t kSlamStateVersion = 4;
+constexpr uint32_t kOldestSlamStateVersion = 3;
 
 // The loop-closing back end's link to the filter (BackEndLink).
 struct BackEndLinkState {
   LoopCloserState closer;
   std::vector<Pose2> key_filtered;                 // the filter's pose at each key scan (map)
   std::vector<std::pair<int, int>> landmark_scan;  // landmark id → the scan last observing it
+  // Point landmark id → its estimate right after that scan (map frame);
+  // empty in a version 3 state, whose landmarks are then drawn from their
+  // estimates.
+  std::vector<std::pair<int, Vector2>> point_seen_at;
   bool has_map_from_graph = false;
   Pose2 map_from_graph;  // the graph's frame in the map frame
   Pose2 last_front_end;  // the front end's pose at the last scan (the closer's frame)

@@ -491,6 +491,24 @@ TEST_F(SlamStateFile, RefusesWhatIsNotAWholeStateOfThisVersionAndMount) {
   EXPECT_NE(refused(other_version).find("no history"), std::string::npos) << refused(other_version);
   EXPECT_NE(refused("P5\n640 480\n").find("not a SLAM state"), std::string::npos);
   EXPECT_EQ(decodeSlamState(bytes, &read), "");
+  ASSERT_FALSE(state.back_end.point_seen_at.empty());
+  EXPECT_EQ(read.back_end.point_seen_at, state.back_end.point_seen_at);
+
+  // A version 3 state (the same, without the point landmarks' estimates at
+  // their latest sightings, the last list of version 4) is still read.
+  SlamState without = state;
+  without.back_end.point_seen_at.clear();
+  const std::string current = encodeSlamState(without);
+  const size_t header = 15 + 4 + 8, checksum = 8, empty_list = 8;
+  std::string payload = current.substr(header, current.size() - header - checksum - empty_list);
+  std::string version3 = current.substr(0, 15) + std::string("\x03\0\0\0", 4);
+  uint64_t length = payload.size(), hash = 14695981039346656037ULL;  // FNV-1a 64
+  for (const char c : payload) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+  for (int i = 0; i < 8; ++i) version3.push_back(static_cast<char>(length >> (8 * i)));
+  version3 += payload;
+  for (int i = 0; i < 8; ++i) version3.push_back(static_cast<char>(hash >> (8 * i)));
+  ASSERT_EQ(decodeSlamState(version3, &read), "");
+  EXPECT_EQ(encodeSlamState(read), current);
 
   EXPECT_NE(readSlamState(dir_ + "/missing.state", &read).find("missing.state"), std::string::npos);
 
