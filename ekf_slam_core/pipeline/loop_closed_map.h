@@ -7,8 +7,9 @@
 //
 // The view moves each piece as re-anchoring would move it now: the robot
 // onto the causal estimate, each landmark with the key scan it hangs off
-// (BackEndLink::landmarkCorrections), a (p, θ) line's seen extent with its
-// line. Landmarks hanging off no key scan (seeded from a map file) stay.
+// (a point landmark from where the filter had it right after its latest
+// sighting: BackEndLink::landmarkCorrections), a (p, θ) line's seen extent
+// with its line. Landmarks hanging off no key scan (seeded from a map file) stay.
 // Without loop closure the causal estimate is the filter's pose and the
 // view is the filter itself.
 #pragma once
