@@ -117,23 +117,37 @@ def main():
     try:
         time.sleep(3.0)
         subprocess.check_call(["rosparam", "set", "use_sim_time", "true"], env=env)
+        record_dir = tempfile.mkdtemp(prefix="realtime_replay_")
+        # As the replay rostests run it: the node's tf buffer widened by the
+        # rate (10 s of log is 2 s of wall clock at 5x).
+        launch = os.path.join(record_dir, "replay.launch")
+        with open(launch, "w") as f:
+            f.write('<launch>\n  <include file="$(find ekf_slam)/launch/slam.launch">\n'
+                    '    <arg name="features" value="false"/>\n  </include>\n'
+                    '  <param name="ekf_slam/tf_cache_time" value="%g"/>\n</launch>\n'
+                    % (10.0 * args.rate))
         procs.append(subprocess.Popen(
-            ["taskset", "-c", str(args.core), "roslaunch", "ekf_slam", "slam.launch",
-             "features:=false"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            preexec_fn=os.setsid))
+            ["taskset", "-c", str(args.core), "roslaunch", launch], env=env,
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid))
         rospy.init_node("realtime_replay", disable_signals=True)
         probe = Probe()
-        record_dir = tempfile.mkdtemp(prefix="realtime_replay_")
         answers = os.path.join(record_dir, "answers.bag")
         procs.append(subprocess.Popen(
             ["rosbag", "record", "-O", answers, "/scan", "/pose",
              "__name:=realtime_replay_record"], env=env, stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL, preexec_fn=os.setsid))
         time.sleep(5.0)
-        start = time.monotonic()
-        play = ["rosbag", "play", "--clock", "--quiet", "-r", str(args.rate), args.bag]
+        # The log's static transforms (base_link -> laser), latched, as
+        # offline.launch gives them: the player waits, paused, until they are.
+        procs.append(subprocess.Popen(
+            ["rosrun", "ekf_slam", "bag_static_tf.py", args.bag, "--resume",
+             "/realtime_replay_player/pause_playback"], env=env, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL, preexec_fn=os.setsid))
+        play = ["rosbag", "play", "--clock", "--quiet", "--pause", "-r", str(args.rate), args.bag,
+                "__name:=realtime_replay_player"]
         if args.seconds > 0:
             play += ["-u", str(args.seconds)]
+        start = time.monotonic()
         subprocess.check_call(play, env=env)
         played = time.monotonic() - start
         time.sleep(5.0)  # the last scans and diagnostics
