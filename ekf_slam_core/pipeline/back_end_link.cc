@@ -117,8 +117,8 @@ std::vector<std::pair<int, Pose2>> BackEndLink::keyCorrections(const EkfSlam& fi
   return corrections;
 }
 
-// landmark_scan_ loses only landmarks the filter no longer holds (ids are
-// never reused).
+// landmark_scan_ and point_seen_at_ lose only landmarks the filter no longer holds (ids
+// are never reused).
 void BackEndLink::forgetBefore(long first_record, const EkfSlam& filter) {
   size_t loop_scans = 0;
   while (loop_scans < record_of_loop_scan_.size() &&
@@ -128,12 +128,13 @@ void BackEndLink::forgetBefore(long first_record, const EkfSlam& filter) {
   record_of_loop_scan_.erase(record_of_loop_scan_.begin(),
                              record_of_loop_scan_.begin() + loop_scans);
   first_loop_scan_ += static_cast<int>(loop_scans);
-  for (auto it = landmark_scan_.begin(); it != landmark_scan_.end();) {
-    it = filter.slotOf(it->first) < 0 ? landmark_scan_.erase(it) : std::next(it);
-  }
-  for (auto it = point_seen_at_.begin(); it != point_seen_at_.end();) {
-    it = filter.slotOf(it->first) < 0 ? point_seen_at_.erase(it) : std::next(it);
-  }
+  const auto forgetGone = [&](auto* by_id) {
+    for (auto it = by_id->begin(); it != by_id->end();) {
+      it = filter.slotOf(it->first) < 0 ? by_id->erase(it) : std::next(it);
+    }
+  };
+  forgetGone(&landmark_scan_);
+  forgetGone(&point_seen_at_);
 }
 
 BackEndLinkState BackEndLink::state() const {
