@@ -250,8 +250,33 @@ bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path) {
   return true;
 }
 
+SweptFloor::SweptFloor(double front, double rear, double half_width, size_t max_poses)
+    : front_(front), rear_(rear), half_width_(half_width), max_poses_(max_poses) {}
+
+void SweptFloor::add(const Pose2& pose) {
+  constexpr double kStep = 0.05, kTurn = 0.1;  // m, rad
+  if (!poses_.empty()) {
+    const Pose2 moved = between(poses_.back(), pose);
+    if (moved.translation().norm() < kStep && std::abs(moved.theta) < kTurn) return;
+  }
+  poses_.push_back(pose);
+  while (poses_.size() > max_poses_) poses_.pop_front();
+}
+
+bool SweptFloor::covers(const Vector2& point) const {
+  for (const Pose2& pose : poses_) {
+    const Vector2 local = transformTo(pose, point);
+    constexpr double kEdge = 1e-9;  // m: a point on the body's edge is in it
+    if (local.x() <= front_ + kEdge && local.x() >= -rear_ - kEdge &&
+        std::abs(local.y()) <= half_width_ + kEdge) {
+      return true;
+    }
+  }
+  return false;
+}
+
 bool stripFree(const ExplorationGrid& grid, const Vector2& from, const Vector2& to,
-               double half_width) {
+               double half_width, const std::function<bool(const Vector2&)>& swept) {
   const double length = (to - from).norm();
   const Vector2 along = length > 0.0 ? Vector2((to - from) / length) : Vector2(1.0, 0.0);
   const Vector2 across(-along.y(), along.x());
@@ -262,8 +287,11 @@ bool stripFree(const ExplorationGrid& grid, const Vector2& from, const Vector2& 
     const Vector2 centre = from + along * std::min(length, i * step);
     for (int j = -steps_across; j <= steps_across; ++j) {
       const double offset = std::clamp(j * step, -half_width, half_width);
-      const int cell = grid.cellAt(centre + across * offset);
-      if (cell < 0 || !grid.free(cell)) return false;
+      const Vector2 p = centre + across * offset;
+      const int cell = grid.cellAt(p);
+      const bool known_free = cell >= 0 && grid.free(cell);
+      const bool covered = (cell < 0 || grid.unknown(cell)) && swept && swept(p);
+      if (!known_free && !covered) return false;
     }
   }
   return true;

@@ -38,6 +38,7 @@
 // follower and the safety gate) is above.
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -177,13 +178,37 @@ std::vector<Vector2> simplifyPath(const std::vector<Vector2>& path, double toler
 // radius from its first point (the robot may start beside a wall).
 bool pathClear(const ExplorationGrid& grid, const std::vector<Vector2>& path);
 
+// The floor the robot's own body has covered: its latest poses (in one
+// frame, the odometry's: exact over a few metres, and unmoved by loop
+// closures), each with the body's rectangle. The laser looks forward only,
+// so the map may not know the floor behind the robot, yet where the robot
+// stood there was room for it.
+class SweptFloor {
+ public:
+  // The body: `front` ahead of the centre, `rear` behind it, `half_width`
+  // either side (m); at most `max_poses` poses are kept, the newest.
+  SweptFloor(double front, double rear, double half_width, size_t max_poses);
+  // Keeps `pose` when it lies 5 cm or 0.1 rad from the newest pose kept.
+  void add(const Pose2& pose);
+  // Whether `point` (the poses' frame) lies in the body at a kept pose.
+  bool covers(const Vector2& point) const;
+  size_t size() const { return poses_.size(); }
+
+ private:
+  double front_, rear_, half_width_;
+  size_t max_poses_;
+  std::deque<Pose2> poses_;
+};
+
 // Whether the map shows free floor for a straight move the laser does not
 // watch (a back-off): every cell of the strip `half_width` either side of
 // the segment from `from` to `to`, sampled at half a cell, is known and
 // free. The strip is the robot's body, not its turning circle: a robot
-// standing in a door can back out of it.
+// standing in a door can back out of it. A point the map does not know
+// counts as free where `swept` (when given) says the robot's body has
+// covered it; a known obstacle never does.
 bool stripFree(const ExplorationGrid& grid, const Vector2& from, const Vector2& to,
-               double half_width);
+               double half_width, const std::function<bool(const Vector2&)>& swept = nullptr);
 
 // The room of a position (map frame), or -1 where none is known.
 using RoomOf = std::function<int(const Vector2&)>;

@@ -152,6 +152,50 @@ TEST(Planner, ARobotInADoorCanBackOutOfItWhereTheFloorIsKnown) {
       stripFree(ExplorationGrid(unknown_behind, ExplorationOptions{}), in_door, behind, 0.25));
 }
 
+TEST(Planner, FloorTheRobotDroveOverCountsAsRoomToBackOffWhereTheMapDoesNotKnowIt) {
+  // The door of the test above, the floor behind the robot unknown to the
+  // map (the laser never looked back): the robot came through the door
+  // along y = 0.95 heading +x, and stands in it.
+  GridMapFile map = drawn(twoRoomsWithADoor(7));
+  const Vector2 in_door(2.05, 0.95), behind(1.55, 0.95);
+  ExplorationGrid probe(map, ExplorationOptions{});
+  for (double x = 0.6; x < 2.0; x += 0.5 * probe.resolution()) {
+    for (double y = 0.6; y <= 1.3; y += 0.5 * probe.resolution()) {
+      map.cells[probe.cellAt(Vector2(x, y))] = -1;
+    }
+  }
+  const ExplorationGrid grid(map, ExplorationOptions{});
+  ASSERT_FALSE(stripFree(grid, in_door, behind, 0.25));
+  // Its body, 0.25 m ahead and 0.35 m behind its centre, 0.25 m either
+  // side, at poses 5 cm apart on the way in.
+  SweptFloor came_in(0.25, 0.35, 0.25, 100);
+  for (int k = 0; k <= 125; ++k) came_in.add(Pose2(0.8 + 0.01 * k, 0.95, 0.0));
+  // A pose is kept every 5 cm (or 0.1 rad) only.
+  EXPECT_GE(came_in.size(), 20u);
+  EXPECT_LE(came_in.size(), 26u);
+  const auto covered = [&](const Vector2& p) { return came_in.covers(p); };
+  EXPECT_TRUE(stripFree(grid, in_door, behind, 0.25, covered));
+  // Its body is no wider than it was: a wider strip reaches floor it never
+  // covered.
+  EXPECT_FALSE(stripFree(grid, in_door, behind, 0.3, covered));
+  // Came in along another line (turned in the door since), the floor
+  // straight behind it is not covered.
+  SweptFloor from_below(0.25, 0.35, 0.25, 100);
+  for (int k = 0; k <= 29; ++k) from_below.add(Pose2(1.5, -0.5 + 0.05 * k, M_PI / 2));
+  EXPECT_FALSE(stripFree(grid, in_door, behind, 0.25,
+                         [&](const Vector2& p) { return from_below.covers(p); }));
+  // Only the newest poses are kept: those of the last 12 cm reach 0.47 m
+  // behind the centre, short of the 0.5 m.
+  SweptFloor short_memory(0.25, 0.35, 0.25, 3);
+  for (int k = 20; k >= 0; --k) short_memory.add(Pose2(2.05 - 0.06 * k, 0.95, 0.0));
+  EXPECT_EQ(short_memory.size(), 3u);
+  EXPECT_FALSE(stripFree(grid, in_door, behind, 0.25,
+                         [&](const Vector2& p) { return short_memory.covers(p); }));
+  // A known obstacle is never floor: the jamb off the door's middle stays.
+  EXPECT_FALSE(stripFree(grid, in_door + Vector2(0.0, 0.15), behind + Vector2(0.0, 0.15), 0.25,
+                         [](const Vector2&) { return true; }));
+}
+
 TEST(Planner, AStartBesideAWallStillGetsOutAndAStartInTheUnknownReachesNothing) {
   ExplorationOptions options;
   options.robot_radius = 0.25;

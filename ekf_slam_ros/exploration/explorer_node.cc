@@ -66,6 +66,9 @@ namespace waypoints = ekf_slam::waypoints;
 
 // A back-off shorter than this (m) frees nothing.
 constexpr double kMinBackoff = 0.05;
+// Odometry poses kept of the floor the robot's body covered (one per 5 cm
+// or 0.1 rad): some metres of driving, more than any back-off needs.
+constexpr size_t kSweptPoses = 200;
 
 volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
@@ -89,6 +92,7 @@ struct ExplorerParams {
   std::string slam_node = "ekf_slam";  // whose save_map and write_state are called
   double robot_half_width = 0.25;      // m: half the body's width with a margin, for back-offs
   double robot_rear = 0.35;            // m from the centre to the rear with a margin, for back-offs
+  double robot_front = 0.25;  // m from the centre to the front with a margin, for back-offs
   ekf_slam::ExplorationOptions exploration;
   waypoints::PursuitOptions pursuit;
   waypoints::RecoveryOptions recovery;
@@ -113,6 +117,7 @@ struct ExplorerParams {
     v.text("slam_node", slam_node);
     v.number("robot_half_width", robot_half_width, Bounds::closed(0.0, 5.0, "m"));
     v.number("robot_rear", robot_rear, Bounds::closed(0.0, 5.0, "m"));
+    v.number("robot_front", robot_front, Bounds::closed(0.0, 5.0, "m"));
     exploration.visitFields(v);
     v.number("lookahead", pursuit.lookahead, Bounds::closed(0.05, 5.0, "m"));
     v.number("max_linear_speed", pursuit.max_linear_speed, Bounds::closed(0.01, 1.5, "m/s"));
@@ -177,7 +182,10 @@ struct GoalRecord {
 class Explorer {
  public:
   Explorer(ros::NodeHandle node, ros::NodeHandle private_node, ExplorerParams params)
-      : params_(std::move(params)), tf_listener_(tf_buffer_), recovery_(params_.recovery) {
+      : params_(std::move(params)),
+        tf_listener_(tf_buffer_),
+        recovery_(params_.recovery),
+        swept_(params_.robot_front, params_.robot_rear, params_.robot_half_width, kSweptPoses) {
     map_subscriber_ = node.subscribe("map", 1, &Explorer::onMap, this);
     cmd_publisher_ = node.advertise<geometry_msgs::Twist>("cmd_vel", 1);
     path_publisher_ = private_node.advertise<nav_msgs::Path>("path", 1, true);
@@ -224,6 +232,7 @@ class Explorer {
     if (last_odometry_) driven_ += (odometry->translation() - last_odometry_->translation()).norm();
     last_odometry_ = *odometry;
     last_pose_ = *pose;
+    swept_.add(*odometry);
     // The map.
     if (!grid_) {
       if ((now - started_).toSec() > params_.map_timeout) {
@@ -464,17 +473,23 @@ class Explorer {
   }
 
   // How far (m, up to backoff_distance) the robot can back off on floor
-  // the map shows free: the strip robot_half_width either side, from its
-  // centre to robot_rear behind it and as far again as it backs.
-  double roomBehind(const Pose2& pose) const {
+  // the map shows free, or that its own body covered where the map does not
+  // know the floor (it came that way): the strip robot_half_width either
+  // side, from its centre to robot_rear behind it and as far again as it
+  // backs. `pose` on the map and `odometry` are the robot's at one time.
+  double roomBehind(const Pose2& pose, const Pose2& odometry) const {
     if (!grid_view_) return 0.0;
     const Vector2 back(-std::cos(pose.theta), -std::sin(pose.theta));
     const double step = grid_view_->resolution();
+    // A point on the map, where the odometry has it.
+    const auto swept = [&](const Vector2& p) {
+      return swept_.covers(ekf_slam::transformFrom(odometry, ekf_slam::transformTo(pose, p)));
+    };
     double room = 0.0;
     while (room + step <= params_.recovery.backoff_distance + 1e-9 &&
            ekf_slam::stripFree(*grid_view_, pose.translation(),
                                pose.translation() + (params_.robot_rear + room + step) * back,
-                               params_.robot_half_width)) {
+                               params_.robot_half_width, swept)) {
       room += step;
     }
     return room;
@@ -495,11 +510,11 @@ class Explorer {
         case waypoints::RecoveryState::kBackingOff: {
           // The laser does not see behind the robot: a back-off into what
           // the map shows occupied or does not know would touch it.
-          const double room = roomBehind(pose);
+          const double room = roomBehind(pose, odometry);
           if (room < kMinBackoff) {
             ROS_WARN(
-                "explorer: blocked at (%.2f, %.2f): held back for %.1f s, and the map shows no "
-                "room to back off; this path is given up",
+                "explorer: blocked at (%.2f, %.2f): held back for %.1f s, and neither the map "
+                "nor the way the robot came shows room to back off; this path is given up",
                 pose.x, pose.y, params_.recovery.stuck_time);
             cornered_ = true;
             stop();
@@ -749,6 +764,7 @@ class Explorer {
   std::vector<Vector2> path_;
   std::unique_ptr<waypoints::PurePursuit> pursuit_;
   waypoints::BlockageRecovery recovery_;
+  ekf_slam::SweptFloor swept_;  // odometry frame
   std::vector<GoalRecord> goals_;
   std::vector<Vector2> finished_rooms_;  // a position in each room left finished
   double driven_ = 0.0;
