@@ -13,10 +13,9 @@ must show where the loop-closed estimate puts things, as the grid does.
 Drawn in the filter's own frame the landmarks fell to 23 % mid-log. In
 the loop-closed frame, each landmark as the filter had it right after its
 latest sighting and moved with the key scan of that sighting, the share on
-ACES is 95 % at the median grid and 80 % at the lowest. Most of the rest
-mark things that have gone since (two objects beside the robot at the
-start, one in a corridor): the grid, whose later rays pass through
-their places, holds them as free; the filter keeps them.
+ACES is 95 % at the median grid and 80 % at the lowest, the first grid
+after the loop, with 10-20 landmarks (docs/live_system.md names those off
+it).
 """
 import bisect
 import collections
