@@ -193,6 +193,8 @@ class SweptFloor {
   // Whether `point` (the poses' frame) lies in the body at a kept pose.
   bool covers(const Vector2& point) const;
   size_t size() const { return poses_.size(); }
+  // Forgets every pose (the frame was reset: an odometry jump).
+  void clear() { poses_.clear(); }
 
  private:
   double front_, rear_, half_width_;

@@ -178,6 +178,11 @@ TEST(Planner, FloorTheRobotDroveOverCountsAsRoomToBackOffWhereTheMapDoesNotKnowI
   // Its body is no wider than it was: a wider strip reaches floor it never
   // covered.
   EXPECT_FALSE(stripFree(grid, in_door, behind, 0.3, covered));
+  // Forgotten (the odometry was reset), the floor is unknown again.
+  SweptFloor forgotten = came_in;
+  forgotten.clear();
+  EXPECT_FALSE(stripFree(grid, in_door, behind, 0.25,
+                         [&](const Vector2& p) { return forgotten.covers(p); }));
   // Came in along another line (turned in the door since), the floor
   // straight behind it is not covered.
   SweptFloor from_below(0.25, 0.35, 0.25, 100);

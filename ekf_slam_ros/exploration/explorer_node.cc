@@ -69,6 +69,9 @@ constexpr double kMinBackoff = 0.05;
 // Odometry poses kept of the floor the robot's body covered (one per 5 cm
 // or 0.1 rad): some metres of driving, more than any back-off needs.
 constexpr size_t kSweptPoses = 200;
+// An odometry step longer than this (m) in one control step is a reset
+// (a driver reconnected), not motion: the floor covered is forgotten.
+constexpr double kOdometryJump = 1.0;
 
 volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
@@ -229,7 +232,16 @@ class Explorer {
       ROS_INFO("explorer: starting at (%.2f, %.2f) in %s", pose->x, pose->y,
                params_.global_frame.c_str());
     }
-    if (last_odometry_) driven_ += (odometry->translation() - last_odometry_->translation()).norm();
+    if (last_odometry_) {
+      const double step = (odometry->translation() - last_odometry_->translation()).norm();
+      if (step > kOdometryJump) {
+        ROS_WARN("explorer: the odometry jumped %.2f m in one step (reset?): not counted as driven",
+                 step);
+        swept_.clear();
+      } else {
+        driven_ += step;
+      }
+    }
     last_odometry_ = *odometry;
     last_pose_ = *pose;
     swept_.add(*odometry);
